@@ -1,0 +1,167 @@
+//! Warps from the unit square to domains used in rendering, each with its density and its
+//! inverse (`warp(inverse(x)) == x`). Densities on the sphere are per unit solid angle; densities
+//! on discs and triangles are per unit area.
+
+use crate::{INV_PI, PI};
+use glam::{Vec2, Vec3};
+
+/// Cosine-weighted direction on the +z hemisphere. Density `cos θ / π` per steradian.
+#[inline]
+pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
+    let phi = 2.0 * PI * u[0];
+    let r = (1.0 - u[1]).max(0.0).sqrt();
+    Vec3::new(phi.cos() * r, phi.sin() * r, u[1].sqrt())
+}
+
+/// Density of [`cosine_hemisphere`] per steradian for a direction with local `cos θ`
+/// (0 below the hemisphere).
+#[inline]
+pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
+    cos_theta.max(0.0) * INV_PI
+}
+
+/// Inverse of [`cosine_hemisphere`].
+#[inline]
+pub fn cosine_hemisphere_inverse(d: Vec3) -> [f32; 2] {
+    [azimuth_fraction(d), d.z * d.z]
+}
+
+/// Direction around +z distributed as `cosⁿ α` (α the angle to +z) over the whole sphere:
+/// density `(n+1)/(2π)·cosⁿ α` per steradian on the +z hemisphere, 0 elsewhere.
+#[inline]
+pub fn power_cosine(u: [f32; 2], exponent: f32) -> Vec3 {
+    let phi = 2.0 * PI * u[0];
+    let cos_theta = u[1].powf(1.0 / (exponent + 1.0));
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    Vec3::new(phi.cos() * sin_theta, phi.sin() * sin_theta, cos_theta)
+}
+
+/// Density of [`power_cosine`] per steradian at local `cos α`.
+#[inline]
+pub fn power_cosine_pdf(cos_alpha: f32, exponent: f32) -> f32 {
+    if cos_alpha <= 0.0 { 0.0 } else { (exponent + 1.0) * (0.5 * INV_PI) * cos_alpha.powf(exponent) }
+}
+
+/// Inverse of [`power_cosine`].
+#[inline]
+pub fn power_cosine_inverse(d: Vec3, exponent: f32) -> [f32; 2] {
+    [azimuth_fraction(d), d.z.max(0.0).powf(exponent + 1.0)]
+}
+
+/// Uniform direction on the unit sphere. Density `1/(4π)` per steradian.
+#[inline]
+pub fn uniform_sphere(u: [f32; 2]) -> Vec3 {
+    let phi = 2.0 * PI * u[0];
+    let z = 1.0 - 2.0 * u[1];
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vec3::new(phi.cos() * r, phi.sin() * r, z)
+}
+
+/// Density of [`uniform_sphere`]: `1/(4π)` per steradian.
+pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * INV_PI;
+
+/// Inverse of [`uniform_sphere`].
+#[inline]
+pub fn uniform_sphere_inverse(d: Vec3) -> [f32; 2] {
+    [azimuth_fraction(d), 0.5 * (1.0 - d.z)]
+}
+
+/// Point on the unit disc by the concentric map (Shirley & Chiu 1997). Density `1/π` per unit
+/// area.
+#[inline]
+pub fn concentric_disc(u: [f32; 2]) -> Vec2 {
+    let a = 2.0 * u[0] - 1.0;
+    let b = 2.0 * u[1] - 1.0;
+    if a == 0.0 && b == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, phi) = if a * a > b * b { (a, (PI / 4.0) * (b / a)) } else { (b, PI / 2.0 - (PI / 4.0) * (a / b)) };
+    Vec2::new(r * phi.cos(), r * phi.sin())
+}
+
+/// Density of [`concentric_disc`]: `1/π` per unit area.
+pub const CONCENTRIC_DISC_PDF: f32 = INV_PI;
+
+/// Inverse of [`concentric_disc`].
+#[inline]
+pub fn concentric_disc_inverse(p: Vec2) -> [f32; 2] {
+    let r = p.length();
+    if r == 0.0 {
+        return [0.5, 0.5];
+    }
+    let mut phi = p.y.atan2(p.x);
+    if phi < -PI / 4.0 {
+        phi += 2.0 * PI;
+    }
+    let (a, b) = if phi < PI / 4.0 {
+        (r, r * phi / (PI / 4.0))
+    } else if phi < 3.0 * PI / 4.0 {
+        (r * (PI / 2.0 - phi) / (PI / 4.0), r)
+    } else if phi < 5.0 * PI / 4.0 {
+        (-r, -r * (phi - PI) / (PI / 4.0))
+    } else {
+        (-r * (3.0 * PI / 2.0 - phi) / (PI / 4.0), -r)
+    };
+    [0.5 * (a + 1.0), 0.5 * (b + 1.0)]
+}
+
+/// Uniform barycentric coordinates `(b1, b2)` on a triangle (the point is
+/// `p0 + b1·(p1−p0) + b2·(p2−p0)`). Density `1/area` per unit area.
+#[inline]
+pub fn uniform_triangle(u: [f32; 2]) -> Vec2 {
+    let s = u[0].sqrt();
+    Vec2::new(1.0 - s, u[1] * s)
+}
+
+/// Inverse of [`uniform_triangle`].
+#[inline]
+pub fn uniform_triangle_inverse(b: Vec2) -> [f32; 2] {
+    let s = 1.0 - b.x;
+    [s * s, if s > 0.0 { b.y / s } else { 0.0 }]
+}
+
+/// The azimuth of `d` as a fraction of a full turn, in `[0, 1)`.
+#[inline]
+fn azimuth_fraction(d: Vec3) -> f32 {
+    let mut phi = d.y.atan2(d.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    let f = phi / (2.0 * PI);
+    if f >= 1.0 { 0.0 } else { f }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid() -> impl Iterator<Item = [f32; 2]> {
+        (1..20).flat_map(|i| (1..20).map(move |j| [i as f32 / 20.0, j as f32 / 20.0]))
+    }
+
+    fn close(a: [f32; 2], b: [f32; 2]) -> bool {
+        (a[0] - b[0]).abs() < 2e-4 && (a[1] - b[1]).abs() < 2e-4
+    }
+
+    #[test]
+    fn warps_invert() {
+        for u in grid() {
+            assert!(close(cosine_hemisphere_inverse(cosine_hemisphere(u)), u), "cosine {u:?}");
+            assert!(close(power_cosine_inverse(power_cosine(u, 7.0), 7.0), u), "power {u:?}");
+            assert!(close(uniform_sphere_inverse(uniform_sphere(u)), u), "sphere {u:?}");
+            assert!(close(concentric_disc_inverse(concentric_disc(u)), u), "disc {u:?}");
+            assert!(close(uniform_triangle_inverse(uniform_triangle(u)), u), "triangle {u:?}");
+        }
+    }
+
+    #[test]
+    fn warps_land_in_their_domain() {
+        for u in grid() {
+            assert!((cosine_hemisphere(u).length() - 1.0).abs() < 1e-5 && cosine_hemisphere(u).z >= 0.0);
+            assert!((uniform_sphere(u).length() - 1.0).abs() < 1e-5);
+            assert!(concentric_disc(u).length() <= 1.0 + 1e-6);
+            let b = uniform_triangle(u);
+            assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6);
+        }
+    }
+}
