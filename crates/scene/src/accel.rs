@@ -1,0 +1,1 @@
+//! Bounding volume hierarchy (being written).
