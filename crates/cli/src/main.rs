@@ -1,1 +1,272 @@
-fn main() {}
+//! `vcm`: the command-line front end. Parses arguments, builds the scene, runs the progressive
+//! driver and writes the images. This is the only place that makes user-facing decisions
+//! (defaults, file names, messages).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use render::driver::Budget;
+use render::{Algorithm, RenderSettings};
+use scene::Scene;
+use scene::cornell::{self, BUILTIN_SCENES};
+
+#[derive(Parser)]
+#[command(name = "vcm", version, about = "A physically based renderer built around vertex connection and merging")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to an image.
+    Render(RenderArgs),
+    /// List the built-in scenes.
+    Scenes,
+    /// Time iterations of an algorithm on the four reference scenes.
+    Bench(BenchArgs),
+}
+
+/// Algorithm names as the command line spells them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum AlgorithmName {
+    /// Path tracing (BSDF sampling + next-event estimation, MIS).
+    Pt,
+    /// Eye light: |cos| shading preview.
+    El,
+    /// Light tracing.
+    Lt,
+    /// Progressive photon mapping.
+    Ppm,
+    /// Bidirectional photon mapping.
+    Bpm,
+    /// Bidirectional path tracing.
+    Bpt,
+    /// Vertex connection and merging.
+    Vcm,
+}
+
+impl AlgorithmName {
+    fn algorithm(self) -> Result<Algorithm> {
+        let name = self.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default();
+        Algorithm::from_name(&name).with_context(|| {
+            let available: Vec<&str> = Algorithm::ALL.iter().map(|(_, n)| *n).collect();
+            format!(
+                "algorithm '{name}' is not implemented yet (the VCM engine is issue #3); available now: {}",
+                available.join(", ")
+            )
+        })
+    }
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Scene: a built-in id (0-3) or name (see `vcm scenes`).
+    #[arg(long, default_value = "cornell-sun")]
+    scene: String,
+    /// Build the Cornell box from a bit mask instead (0-511, see `vcm scenes`); overrides --scene.
+    #[arg(long, value_name = "N")]
+    scene_mask: Option<u32>,
+    /// Rendering algorithm.
+    #[arg(long, short, value_enum, default_value_t = AlgorithmName::Pt)]
+    algorithm: AlgorithmName,
+    /// Number of iterations (one sample per pixel each).
+    #[arg(long, short, value_name = "N", conflicts_with = "time")]
+    iterations: Option<u64>,
+    /// Render for this many seconds of wall-clock time instead.
+    #[arg(long, short, value_name = "SECONDS")]
+    time: Option<f64>,
+    /// Image size in pixels.
+    #[arg(long, short, value_name = "WxH", default_value = "512x512", value_parser = parse_resolution)]
+    resolution: (u32, u32),
+    /// Maximum path length in segments (camera segment included; 2 = direct lighting).
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    max_length: u32,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    threads: usize,
+    /// Output image; the format follows the extension (.exr, .pfm, .hdr, .png). A linear
+    /// output also gets a .png preview beside it.
+    #[arg(long, short, value_name = "FILE", default_value = "render.exr")]
+    output: PathBuf,
+    /// Exposure of the PNG preview in stops (the linear outputs are never scaled).
+    #[arg(long, value_name = "STOPS", default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Do not draw a progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    /// Algorithm to time.
+    #[arg(long, short, value_enum, default_value_t = AlgorithmName::Pt)]
+    algorithm: AlgorithmName,
+    /// Iterations per scene (after one warm-up iteration).
+    #[arg(long, short, default_value_t = 8)]
+    iterations: u64,
+    /// Image size in pixels.
+    #[arg(long, short, value_name = "WxH", default_value = "512x512", value_parser = parse_resolution)]
+    resolution: (u32, u32),
+    /// Worker threads (default: all cores).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+}
+
+fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
+    let invalid = || format!("invalid resolution '{text}': expected WIDTHxHEIGHT, e.g. 512x512, each 1-16384");
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(invalid)?;
+    let w: u32 = w.trim().parse().map_err(|_| invalid())?;
+    let h: u32 = h.trim().parse().map_err(|_| invalid())?;
+    if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
+        return Err(invalid());
+    }
+    Ok((w, h))
+}
+
+/// Resolves `--scene` to a Cornell mask.
+fn scene_mask(name: &str) -> Result<u32> {
+    if let Some(s) = BUILTIN_SCENES.iter().find(|s| s.name == name || s.id.to_string() == name) {
+        return Ok(s.mask);
+    }
+    let valid: Vec<String> = BUILTIN_SCENES.iter().map(|s| format!("{} ({})", s.id, s.name)).collect();
+    if Path::new(name).extension().is_some() || name.contains('/') {
+        if !Path::new(name).exists() {
+            bail!("scene file '{name}' does not exist (built-in scenes: {})", valid.join(", "));
+        }
+        bail!("cannot load '{name}': scene files are not supported yet (issue #4); built-in scenes: {}", valid.join(", "));
+    }
+    bail!("unknown scene '{name}'; valid scenes: {}", valid.join(", "))
+}
+
+fn build_scene(mask: u32, (width, height): (u32, u32)) -> Result<Scene> {
+    cornell::build(mask, width, height).with_context(|| format!("invalid scene mask {mask}: expected 0-{}", cornell::MAX_MASK))
+}
+
+/// The files a render writes: the requested one and, for linear formats, a PNG preview.
+fn output_paths(output: &Path) -> Result<Vec<(PathBuf, io::ImageFormat)>> {
+    let format = io::ImageFormat::from_path(output)?;
+    let mut paths = vec![(output.to_path_buf(), format)];
+    if format != io::ImageFormat::Png {
+        paths.push((output.with_extension("png"), io::ImageFormat::Png));
+    }
+    Ok(paths)
+}
+
+/// Fails early, before any rendering, if an output cannot be created.
+fn check_writable(path: &Path) -> Result<()> {
+    let existed = path.exists();
+    std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .with_context(|| format!("cannot write output '{}'", path.display()))?;
+    if !existed {
+        let _ = std::fs::remove_file(path);
+    }
+    Ok(())
+}
+
+fn run_render(args: RenderArgs) -> Result<()> {
+    let algorithm = args.algorithm.algorithm()?;
+    let mask = match args.scene_mask {
+        Some(mask) => mask,
+        None => scene_mask(&args.scene)?,
+    };
+    if args.max_length == 0 {
+        bail!("--max-length must be at least 1");
+    }
+    let budget = match (args.iterations, args.time) {
+        (_, Some(t)) if !(t.is_finite() && t > 0.0) => bail!("--time must be a positive number of seconds, got {t}"),
+        (_, Some(t)) => Budget::Time(Duration::from_secs_f64(t)),
+        (Some(0), _) => bail!("--iterations must be at least 1"),
+        (Some(n), None) => Budget::Iterations(n),
+        (None, None) => Budget::Iterations(16),
+    };
+    let outputs = output_paths(&args.output)?;
+    for (path, _) in &outputs {
+        check_writable(path)?;
+    }
+    let scene = build_scene(mask, args.resolution)?;
+    let settings = RenderSettings {
+        algorithm,
+        budget,
+        max_length: args.max_length,
+        seed: args.seed,
+        threads: args.threads,
+        progress: !args.quiet,
+    };
+    let result = render::render(&scene, &settings).map_err(anyhow::Error::msg)?;
+    let film = &result.film;
+    let image = io::Image { width: film.width() as usize, height: film.height() as usize, pixels: film.mean() };
+    let options = io::WriteOptions { exposure_stops: args.exposure };
+    for (path, _) in &outputs {
+        io::write_image(path, &image, &options)?;
+    }
+    let seconds = result.elapsed.as_secs_f64();
+    let iterations = film.iterations();
+    let names: Vec<String> = outputs.iter().map(|(p, _)| p.display().to_string()).collect();
+    eprintln!(
+        "{} with {} at {}x{}: {} iterations in {:.2} s ({:.1} ms/iteration, {} threads), {} rejected samples -> {}",
+        scene.name,
+        algorithm.name(),
+        film.width(),
+        film.height(),
+        iterations,
+        seconds,
+        1e3 * seconds / iterations.max(1) as f64,
+        result.threads,
+        film.rejected_samples(),
+        names.join(", ")
+    );
+    Ok(())
+}
+
+fn run_scenes() {
+    println!("{:<4} {:<22} {:<6} description", "id", "name", "mask");
+    for s in BUILTIN_SCENES {
+        println!("{:<4} {:<22} {:<6} {}", s.id, s.name, s.mask, s.description);
+    }
+    println!();
+    println!("--scene-mask N builds other variants: ceiling light 1, sun 2, point 4, background 8,");
+    println!("large mirror 16, large glass 32, small mirror 64, small glass 128, glossy floor 256.");
+}
+
+fn run_bench(args: BenchArgs) -> Result<()> {
+    let algorithm = args.algorithm.algorithm()?;
+    println!("{:<22} {:>10} {:>14} {:>8}", "scene", "algorithm", "ms/iteration", "threads");
+    for builtin in BUILTIN_SCENES {
+        let scene = build_scene(builtin.mask, args.resolution)?;
+        let settings = |budget| RenderSettings { algorithm, budget, threads: args.threads, ..RenderSettings::default() };
+        render::render(&scene, &settings(Budget::Iterations(1))).map_err(anyhow::Error::msg)?;
+        let result = render::render(&scene, &settings(Budget::Iterations(args.iterations))).map_err(anyhow::Error::msg)?;
+        let ms = 1e3 * result.elapsed.as_secs_f64() / args.iterations as f64;
+        println!("{:<22} {:>10} {:>14.1} {:>8}", builtin.name, algorithm.name(), ms, result.threads);
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let outcome = match cli.command {
+        Command::Render(args) => run_render(args),
+        Command::Scenes => {
+            run_scenes();
+            Ok(())
+        }
+        Command::Bench(args) => run_bench(args),
+    };
+    match outcome {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

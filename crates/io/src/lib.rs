@@ -1,1 +1,137 @@
-//! placeholder
+//! Image file input and output for linear HDR radiance images.
+//!
+//! This crate owns the on-disk image formats of the renderer:
+//!
+//! - **EXR**: 32-bit float RGB, lossless; the canonical output format.
+//! - **PFM**: portable float map, little-endian RGB on write; both byte
+//!   orders and greyscale on read. Rows are stored bottom to top.
+//! - **HDR**: Radiance RGBE (8-bit mantissas with a shared exponent).
+//! - **PNG**: 8-bit sRGB for previews, with an exposure adjustment.
+//!
+//! The format is chosen from the file extension (case-insensitive) by
+//! [`ImageFormat::from_path`]. All errors are [`ImageError`]s whose messages
+//! name the file; malformed or truncated input gives an error, never a panic.
+
+mod error;
+mod exr_file;
+mod linear_image;
+mod pfm;
+mod srgb;
+mod via_image;
+
+use std::path::Path;
+
+pub use crate::error::ImageError;
+pub use crate::linear_image::{Image, MAX_PIXELS, downsample_box};
+pub use crate::srgb::{linear_to_srgb8, srgb_eotf, srgb_oetf, srgb8_to_linear};
+
+/// An image file format supported by [`write_image`] and [`read_image`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ImageFormat {
+    /// OpenEXR (`.exr`), float32 RGB.
+    Exr,
+    /// Portable float map (`.pfm`).
+    Pfm,
+    /// Radiance RGBE (`.hdr`).
+    Hdr,
+    /// 8-bit sRGB PNG (`.png`).
+    Png,
+}
+
+impl ImageFormat {
+    /// Picks the format from the extension of `path`, ignoring case.
+    ///
+    /// Errors with [`ImageError::UnsupportedExtension`] or
+    /// [`ImageError::MissingExtension`].
+    pub fn from_path(path: &Path) -> Result<Self, ImageError> {
+        let Some(extension) = path.extension() else {
+            return Err(ImageError::MissingExtension {
+                path: path.to_path_buf(),
+            });
+        };
+        let extension = extension.to_string_lossy();
+        match extension.to_ascii_lowercase().as_str() {
+            "exr" => Ok(Self::Exr),
+            "pfm" => Ok(Self::Pfm),
+            "hdr" => Ok(Self::Hdr),
+            "png" => Ok(Self::Png),
+            _ => Err(ImageError::UnsupportedExtension {
+                path: path.to_path_buf(),
+                extension: extension.into_owned(),
+            }),
+        }
+    }
+
+    /// The canonical lower-case extension, without the dot.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Self::Exr => "exr",
+            Self::Pfm => "pfm",
+            Self::Hdr => "hdr",
+            Self::Png => "png",
+        }
+    }
+}
+
+impl std::fmt::Display for ImageFormat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Exr => "EXR",
+            Self::Pfm => "PFM",
+            Self::Hdr => "HDR",
+            Self::Png => "PNG",
+        })
+    }
+}
+
+/// Options for [`write_image`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct WriteOptions {
+    /// Exposure adjustment in stops, applied to PNG output only: values are
+    /// multiplied by `2^exposure_stops` before sRGB encoding. The HDR formats
+    /// always store the radiance unchanged.
+    pub exposure_stops: f32,
+}
+
+/// Writes `image` to `path` in the format given by the path's extension.
+///
+/// - EXR and PFM store every `f32` bit for bit (including NaN and ±∞).
+/// - HDR (RGBE) keeps about 8 bits of relative precision per pixel; NaN and
+///   negative values become 0, and values beyond RGBE's range are clamped or
+///   flushed to 0.
+/// - PNG scales by `2^exposure_stops`, clamps to `[0, 1]` (NaN → 0) and
+///   applies the sRGB transfer function with rounding to 8 bits.
+///
+/// Errors if the extension is unsupported, the image is empty or its pixel
+/// buffer does not match `width * height`, or the file cannot be written.
+/// The parent directory is not created. A failed write may leave a partial
+/// file behind.
+pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result<(), ImageError> {
+    let format = ImageFormat::from_path(path)?;
+    image
+        .check_shape()
+        .map_err(|message| ImageError::encode(path, format, message))?;
+    match format {
+        ImageFormat::Exr => exr_file::write(path, image),
+        ImageFormat::Pfm => pfm::write(path, image),
+        ImageFormat::Hdr => via_image::write_hdr(path, image),
+        ImageFormat::Png => via_image::write_png(path, image, options),
+    }
+}
+
+/// Reads the image at `path` in the format given by the path's extension,
+/// returning linear RGB.
+///
+/// PNG input is decoded from sRGB to linear (any bit depth; alpha is
+/// dropped). Greyscale PFM is replicated to RGB. EXR input takes the first
+/// layer with `R`, `G`, `B` channels.
+///
+/// Errors (never panics) on unsupported extensions, unreadable files,
+/// malformed or truncated contents, and images larger than [`MAX_PIXELS`].
+pub fn read_image(path: &Path) -> Result<Image, ImageError> {
+    match ImageFormat::from_path(path)? {
+        ImageFormat::Exr => exr_file::read(path),
+        ImageFormat::Pfm => pfm::read(path),
+        format @ (ImageFormat::Hdr | ImageFormat::Png) => via_image::read(path, format),
+    }
+}

@@ -1,1 +1,19 @@
-//! placeholder
+//! Integrators and the progressive driver.
+//!
+//! * [`path_tracer`]: the reference path tracer (BSDF sampling + next-event estimation,
+//!   combined by MIS), deliberately independent of the VCM engine.
+//! * [`eye_light`]: a fast `|cos|` shading preview.
+//! * [`driver`]: iterations or a time budget, threads, determinism, progress.
+
+pub mod driver;
+pub mod eye_light;
+pub mod path_tracer;
+
+pub use driver::{Algorithm, RenderOutput, RenderSettings, render};
+
+/// The balance heuristic weight of a sample drawn with density `own` when another technique
+/// would have drawn it with density `other` (both in the same measure).
+#[inline]
+pub fn balance_heuristic(own: f32, other: f32) -> f32 {
+    if own + other > 0.0 { own / (own + other) } else { 0.0 }
+}

@@ -4,3 +4,16 @@
 //! This crate does not know about integrators or file formats.
 
 pub mod accel;
+pub mod camera;
+pub mod cornell;
+pub mod film;
+pub mod light;
+pub mod material;
+pub mod scene;
+pub mod shape;
+
+pub use camera::Camera;
+pub use film::{Film, FrameBuffer};
+pub use light::{BoundingSphere, DirectSample, EmissionSample, HitRadiance, Light};
+pub use material::{Bsdf, BsdfEval, BsdfSample, LobeKind, Material, PdfPair, TransportMode};
+pub use scene::{Primitive, Scene, SurfaceHit};

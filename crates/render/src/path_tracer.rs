@@ -1,0 +1,98 @@
+//! The reference path tracer: unidirectional camera paths with BSDF sampling and next-event
+//! estimation (one light sample per non-specular vertex), combined with the balance heuristic.
+//! Russian roulette uses the BSDF's continuation probability and enters the BSDF pdf.
+//!
+//! Path length counts segments including the camera segment: an emitter seen directly is a
+//! path of length 1, direct lighting of the first hit length 2.
+
+use math::{RAY_EPSILON, Ray, Rng};
+use scene::{Bsdf, Scene, TransportMode};
+use spectrum::Rgb;
+
+use crate::balance_heuristic;
+
+/// Radiance arriving at the camera along `ray`, for paths of at most `max_length` segments.
+pub fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32) -> Rgb {
+    let sphere = &scene.bounding_sphere;
+    let pick_probability = scene.light_pick_probability();
+    let mut ray = camera_ray;
+    let mut throughput = Rgb::WHITE;
+    let mut result = Rgb::BLACK;
+    let mut path_length = 1u32;
+    // Solid-angle pdf of the last BSDF sample (Russian roulette included), and whether it
+    // was specular (then no other technique could have produced the next vertex).
+    let mut last_pdf = 1.0f32;
+    let mut last_specular = true;
+    // Extra distance from the last vertex to the current ray origin.
+    let mut origin_offset = 0.0f32;
+
+    loop {
+        let Some(hit) = scene.intersect(&ray) else {
+            // The ray leaves the scene: environment light.
+            if let Some(light) = scene.background_light()
+                && let Some(emitted) = light.radiance_on_hit(ray.direction, sphere)
+            {
+                let weight = if last_specular {
+                    1.0
+                } else {
+                    balance_heuristic(last_pdf, emitted.direct_pdf.0 * pick_probability)
+                };
+                result += throughput * emitted.radiance * weight;
+            }
+            break;
+        };
+
+        // Emitter hit: collect (front side only) and stop; emitters do not scatter.
+        if let Some(light_index) = hit.light {
+            let light = &scene.lights[light_index as usize];
+            if let Some(emitted) = light.radiance_on_hit(ray.direction, sphere) {
+                let weight = if last_specular {
+                    1.0
+                } else {
+                    let distance = hit.distance + origin_offset;
+                    let direct_pdf = emitted.direct_pdf.to_solid_angle(distance * distance, emitted.cos_at_light);
+                    balance_heuristic(last_pdf, direct_pdf.0 * pick_probability)
+                };
+                result += throughput * emitted.radiance * weight;
+            }
+            break;
+        }
+        if path_length >= max_length {
+            break;
+        }
+
+        let Some(bsdf) = Bsdf::new(scene.material(&hit), hit.normal, -ray.direction, TransportMode::Radiance) else {
+            break;
+        };
+        let continuation = bsdf.continuation_probability();
+
+        // Next-event estimation (a path one segment longer).
+        if !bsdf.is_delta()
+            && let Some((_, light, pick)) = scene.pick_light(rng.uniform())
+        {
+            let u = rng.uniform2();
+            if let Some(direct) = light.sample_direct(hit.position, u, sphere)
+                && let Some(eval) = bsdf.evaluate(direct.direction)
+                && !scene.occluded(hit.position, direct.direction, direct.distance)
+            {
+                let light_pdf = direct.direct_pdf.0 * pick;
+                let weight = if light.is_delta() { 1.0 } else { balance_heuristic(light_pdf, eval.pdf.forward.0 * continuation) };
+                result += throughput * direct.radiance * eval.value * (eval.cos_generated * weight / light_pdf);
+            }
+        }
+
+        // Continue by BSDF sampling, with Russian roulette.
+        let Some(sample) = bsdf.sample(rng.uniform3()) else { break };
+        if continuation < 1.0 && rng.uniform() >= continuation {
+            break;
+        }
+        let pdf = sample.pdf.forward.0 * continuation;
+        throughput *= sample.value * (sample.cos_generated / pdf);
+        last_pdf = pdf;
+        last_specular = sample.lobe.is_specular();
+        ray = Ray::new(hit.position + RAY_EPSILON * sample.direction, sample.direction);
+        origin_offset = RAY_EPSILON;
+        path_length += 1;
+    }
+    result
+}

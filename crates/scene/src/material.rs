@@ -1,0 +1,347 @@
+//! Materials of the reference scenes and the per-hit BSDF built from them.
+//!
+//! A [`Material`] is a sum of components: Lambertian diffuse, normalised Phong, a perfect mirror
+//! and, when `ior ≥ 0`, a smooth dielectric (the mirror part becomes Fresnel-weighted and a
+//! refraction lobe appears). A [`Bsdf`] is built per hit from the material, the geometric normal,
+//! the *fixed* direction (the one the walk arrived from, pointing away from the surface) and the
+//! [`TransportMode`]. Every query takes the *generated* direction and returns both pdfs:
+//! `forward` (fixed → generated) and `reverse` (generated → fixed), in solid angle. Russian
+//! roulette is **not** included in these pdfs; the integrator multiplies them by
+//! [`Bsdf::continuation_probability`].
+//!
+//! Diffuse and Phong are one-sided: zero unless both directions lie at least
+//! [`COSINE_EPSILON`] above the surface on the side the normal points to. Mirror and glass
+//! work from both sides. Specular lobes use "pdf = probability of picking the lobe" and
+//! value `ρ/|cos θ|` (tech report eq. 52).
+
+use math::{COSINE_EPSILON, Frame, INV_PI, PdfW, Vec3, sqr, warp};
+use spectrum::Rgb;
+
+/// Below this cosine between the generated direction and the mirrored fixed direction, the
+/// Phong lobe is zero.
+const PHONG_COSINE_EPSILON: f32 = 1e-3;
+
+/// A material as a sum of components (all reflectances in `[0, 1]` per channel).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Lambertian reflectance ρd.
+    pub diffuse: Rgb,
+    /// Phong reflectance ρs.
+    pub phong: Rgb,
+    /// Phong exponent n.
+    pub phong_exponent: f32,
+    /// Mirror reflectance ρm (Fresnel-weighted when `ior ≥ 0`).
+    pub mirror: Rgb,
+    /// Relative index of refraction inside/outside; negative means "no refraction".
+    pub ior: f32,
+}
+
+impl Material {
+    /// A material that absorbs everything (used for emitters).
+    pub const BLACK: Material =
+        Material { diffuse: Rgb::BLACK, phong: Rgb::BLACK, phong_exponent: 1.0, mirror: Rgb::BLACK, ior: -1.0 };
+
+    /// Pure Lambertian reflector.
+    pub const fn diffuse(rho: Rgb) -> Self {
+        Material { diffuse: rho, ..Self::BLACK }
+    }
+}
+
+/// Which quantity a sub-path carries. The adjoint BSDF differs for refraction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransportMode {
+    /// Camera sub-paths: radiance flows towards the fixed direction.
+    Radiance,
+    /// Light sub-paths: importance flows towards the fixed direction.
+    Importance,
+}
+
+/// Which kind of lobe produced a sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LobeKind {
+    /// Lambertian.
+    Diffuse,
+    /// Normalised Phong.
+    Glossy,
+    /// Perfect reflection (delta).
+    SpecularReflection,
+    /// Perfect refraction (delta).
+    SpecularTransmission,
+}
+
+impl LobeKind {
+    /// True for the delta lobes.
+    pub fn is_specular(self) -> bool {
+        matches!(self, LobeKind::SpecularReflection | LobeKind::SpecularTransmission)
+    }
+}
+
+/// Forward and reverse solid-angle pdfs of one direction pair.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PdfPair {
+    /// Density of generating the generated direction given the fixed one.
+    pub forward: PdfW,
+    /// Density of generating the fixed direction given the generated one.
+    pub reverse: PdfW,
+}
+
+/// Result of [`Bsdf::evaluate`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfEval {
+    /// BSDF value f (per steradian), without the cosine.
+    pub value: Rgb,
+    /// `|cos θ|` of the generated direction with the normal.
+    pub cos_generated: f32,
+    /// Lobe-selection-weighted pdfs of the non-specular lobes.
+    pub pdf: PdfPair,
+}
+
+/// Result of [`Bsdf::sample`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    /// The generated unit direction (world space, pointing away from the surface).
+    pub direction: Vec3,
+    /// BSDF value f; for specular lobes `ρ/|cos θ|`.
+    pub value: Rgb,
+    /// `|cos θ|` of the generated direction.
+    pub cos_generated: f32,
+    /// pdfs; for specular lobes the lobe-selection probability.
+    pub pdf: PdfPair,
+    /// The lobe that was sampled.
+    pub lobe: LobeKind,
+}
+
+/// Lobe selection probabilities, proportional to each lobe's albedo (luminance).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct LobeProbabilities {
+    diffuse: f32,
+    phong: f32,
+    reflect: f32,
+    refract: f32,
+}
+
+/// A BSDF at one hit, for one fixed direction and transport mode.
+#[derive(Clone, Copy, Debug)]
+pub struct Bsdf {
+    material: Material,
+    frame: Frame,
+    local_fixed: Vec3,
+    mode: TransportMode,
+    probabilities: LobeProbabilities,
+    fresnel: f32,
+    continuation: f32,
+}
+
+/// Unpolarised Fresnel reflectance of a smooth dielectric with relative IOR `ior` (inside over
+/// outside) for a direction with cosine `cos_incident` to the outward normal (negative: the
+/// direction is inside). Returns 1 for total internal reflection and for `ior < 0`.
+pub fn fresnel_dielectric(cos_incident: f32, ior: f32) -> f32 {
+    if ior < 0.0 {
+        return 1.0;
+    }
+    let (cos_i, eta) = if cos_incident < 0.0 { (-cos_incident, ior) } else { (cos_incident, 1.0 / ior) };
+    // eta = η_incident / η_transmitted.
+    let sin_t2 = sqr(eta) * (1.0 - sqr(cos_i)).max(0.0);
+    if sin_t2 >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin_t2).sqrt();
+    let r_parallel = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    let r_perpendicular = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    0.5 * (sqr(r_parallel) + sqr(r_perpendicular))
+}
+
+impl Bsdf {
+    /// Builds the BSDF at a hit with unit geometric `normal` for the unit `fixed` direction
+    /// (pointing away from the surface). Returns `None` when the material cannot scatter
+    /// (all components black) or the fixed direction is grazing.
+    pub fn new(material: &Material, normal: Vec3, fixed: Vec3, mode: TransportMode) -> Option<Bsdf> {
+        let frame = Frame::from_z(normal);
+        let local_fixed = frame.to_local(fixed);
+        if local_fixed.z.abs() < COSINE_EPSILON {
+            return None;
+        }
+        let fresnel = fresnel_dielectric(local_fixed.z, material.ior);
+        let albedo_diffuse = material.diffuse.luminance();
+        let albedo_phong = material.phong.luminance();
+        let albedo_reflect = fresnel * material.mirror.luminance();
+        let albedo_refract = if material.ior > 0.0 { 1.0 - fresnel } else { 0.0 };
+        let total = albedo_diffuse + albedo_phong + albedo_reflect + albedo_refract;
+        if total < 1e-9 {
+            return None;
+        }
+        let probabilities = LobeProbabilities {
+            diffuse: albedo_diffuse / total,
+            phong: albedo_phong / total,
+            reflect: albedo_reflect / total,
+            refract: albedo_refract / total,
+        };
+        // Russian roulette keeps the path with the largest per-channel albedo, so a path's
+        // weight never grows through the roulette (refraction has weight 1 − F).
+        let refract_weight = if material.ior > 0.0 { 1.0 - fresnel } else { 0.0 };
+        let continuation = ((material.diffuse + material.phong + material.mirror * fresnel).max_component()
+            + refract_weight)
+            .min(1.0);
+        Some(Bsdf { material: *material, frame, local_fixed, mode, probabilities, fresnel, continuation })
+    }
+
+    /// Probability of continuing a path through this vertex (Russian roulette). It enters the
+    /// MIS pdfs as a factor.
+    pub fn continuation_probability(&self) -> f32 {
+        self.continuation
+    }
+
+    /// True when every lobe with non-zero probability is a delta lobe, so that evaluation is
+    /// always zero and the vertex cannot be connected to or merged at.
+    pub fn is_delta(&self) -> bool {
+        self.probabilities.diffuse == 0.0 && self.probabilities.phong == 0.0
+    }
+
+    /// True when the BSDF has at least one non-delta lobe.
+    pub fn has_non_delta(&self) -> bool {
+        !self.is_delta()
+    }
+
+    /// The transport mode the BSDF was built for.
+    pub fn mode(&self) -> TransportMode {
+        self.mode
+    }
+
+    /// `|cos θ|` of the fixed direction with the geometric normal.
+    pub fn cos_fixed(&self) -> f32 {
+        self.local_fixed.z.abs()
+    }
+
+    /// The fixed direction in world space.
+    pub fn fixed_direction(&self) -> Vec3 {
+        self.frame.to_world(self.local_fixed)
+    }
+
+    /// Evaluates the non-specular lobes for the unit world direction `generated`. Returns
+    /// `None` when the value is zero (other side of the surface, below a one-sided lobe, or a
+    /// purely specular material).
+    pub fn evaluate(&self, generated: Vec3) -> Option<BsdfEval> {
+        let local_generated = self.frame.to_local(generated);
+        if local_generated.z * self.local_fixed.z <= 0.0 {
+            return None;
+        }
+        let mut value = Rgb::BLACK;
+        let mut pdf = PdfPair::default();
+        self.add_non_delta(local_generated, &mut value, &mut pdf);
+        if value.is_black() {
+            return None;
+        }
+        Some(BsdfEval { value, cos_generated: local_generated.z.abs(), pdf })
+    }
+
+    /// Samples a direction with three uniform numbers: `u[2]` picks the lobe (in proportion to
+    /// the lobe albedos), `u[0..2]` the direction within it. Returns `None` when the sample
+    /// carries no energy (e.g. a Phong direction below the surface, which is rejected rather
+    /// than continued through the surface).
+    pub fn sample(&self, u: [f32; 3]) -> Option<BsdfSample> {
+        let p = self.probabilities;
+        let pick = u[2];
+        if pick < p.diffuse + p.phong {
+            let local = if pick < p.diffuse {
+                if self.local_fixed.z < COSINE_EPSILON {
+                    return None;
+                }
+                warp::cosine_hemisphere([u[0], u[1]])
+            } else {
+                let lobe_axis = self.reflected_fixed();
+                Frame::from_z(lobe_axis).to_world(warp::power_cosine([u[0], u[1]], self.material.phong_exponent))
+            };
+            let mut value = Rgb::BLACK;
+            let mut pdf = PdfPair::default();
+            self.add_non_delta(local, &mut value, &mut pdf);
+            if value.is_black() || pdf.forward.0 <= 0.0 {
+                return None;
+            }
+            let lobe = if pick < p.diffuse { LobeKind::Diffuse } else { LobeKind::Glossy };
+            return Some(BsdfSample {
+                direction: self.frame.to_world(local),
+                value,
+                cos_generated: local.z.abs(),
+                pdf,
+                lobe,
+            });
+        }
+        if pick < p.diffuse + p.phong + p.reflect {
+            let local = self.reflected_fixed();
+            let cos = local.z.abs();
+            let value = self.material.mirror * (self.fresnel / cos);
+            let pdf = PdfPair { forward: PdfW(p.reflect), reverse: PdfW(p.reflect) };
+            return Some(BsdfSample {
+                direction: self.frame.to_world(local),
+                value,
+                cos_generated: cos,
+                pdf,
+                lobe: LobeKind::SpecularReflection,
+            });
+        }
+        self.sample_refraction()
+    }
+
+    /// The fixed direction mirrored about the normal, in local coordinates.
+    fn reflected_fixed(&self) -> Vec3 {
+        Vec3::new(-self.local_fixed.x, -self.local_fixed.y, self.local_fixed.z)
+    }
+
+    /// Adds diffuse and Phong values and their selection-weighted pdfs for a local direction.
+    fn add_non_delta(&self, local_generated: Vec3, value: &mut Rgb, pdf: &mut PdfPair) {
+        let p = self.probabilities;
+        let fixed = self.local_fixed;
+        if fixed.z < COSINE_EPSILON || local_generated.z < COSINE_EPSILON {
+            return;
+        }
+        if p.diffuse > 0.0 {
+            *value += self.material.diffuse * INV_PI;
+            pdf.forward.0 += p.diffuse * warp::cosine_hemisphere_pdf(local_generated.z);
+            pdf.reverse.0 += p.diffuse * warp::cosine_hemisphere_pdf(fixed.z);
+        }
+        if p.phong > 0.0 {
+            let cos_alpha = self.reflected_fixed().dot(local_generated);
+            if cos_alpha > PHONG_COSINE_EPSILON {
+                let n = self.material.phong_exponent;
+                let lobe = cos_alpha.powf(n);
+                *value += self.material.phong * ((n + 2.0) * 0.5 * INV_PI * lobe);
+                // The lobe around reflect(fixed) evaluated at generated has the same cosine
+                // as the lobe around reflect(generated) evaluated at fixed.
+                let density = p.phong * (n + 1.0) * 0.5 * INV_PI * lobe;
+                pdf.forward.0 += density;
+                pdf.reverse.0 += density;
+            }
+        }
+    }
+
+    /// Samples the refraction lobe (chosen with probability `1 − F` of the dielectric lobes).
+    fn sample_refraction(&self) -> Option<BsdfSample> {
+        let p = self.probabilities;
+        if p.refract <= 0.0 {
+            return None;
+        }
+        let fixed = self.local_fixed;
+        // eta = η on the fixed side / η on the generated side.
+        let (eta, sign) = if fixed.z > 0.0 { (1.0 / self.material.ior, -1.0) } else { (self.material.ior, 1.0) };
+        let sin_t2 = sqr(eta) * (1.0 - sqr(fixed.z)).max(0.0);
+        if sin_t2 >= 1.0 {
+            return None;
+        }
+        let cos_t = (1.0 - sin_t2).sqrt();
+        let local = Vec3::new(-eta * fixed.x, -eta * fixed.y, sign * cos_t);
+        let transmit = 1.0 - self.fresnel;
+        // Radiance is compressed by (η_fixed/η_generated)² when it crosses into the denser
+        // medium towards the camera; importance is not (Veach 1997, §5.2).
+        let scale = match self.mode {
+            TransportMode::Radiance => transmit * sqr(eta),
+            TransportMode::Importance => transmit,
+        };
+        Some(BsdfSample {
+            direction: self.frame.to_world(local),
+            value: Rgb::splat(scale / cos_t),
+            cos_generated: cos_t,
+            pdf: PdfPair { forward: PdfW(p.refract), reverse: PdfW(p.refract) },
+            lobe: LobeKind::SpecularTransmission,
+        })
+    }
+}
