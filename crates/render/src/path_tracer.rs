@@ -4,6 +4,9 @@
 //!
 //! Path length counts segments including the camera segment: an emitter seen directly is a
 //! path of length 1, direct lighting of the first hit length 2.
+//!
+//! An emitter that also reflects (a material with non-zero albedo) keeps scattering after its
+//! emission is collected; the reference scenes' emitters are black and end the path.
 
 use math::{RAY_EPSILON, Ray, Rng};
 use scene::{Bsdf, Scene, TransportMode};
@@ -11,8 +14,30 @@ use spectrum::Rgb;
 
 use crate::balance_heuristic;
 
-/// Radiance arriving at the camera along `ray`, for paths of at most `max_length` segments.
-pub fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32) -> Rgb {
+/// Settings of the path tracer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathTracer {
+    /// Maximum path length in segments.
+    pub max_length: u32,
+    /// Use next-event estimation (combined with BSDF sampling by MIS). Without it, light is
+    /// found only by BSDF sampling, an independent estimator used to test the MIS weights;
+    /// delta lights then contribute nothing.
+    pub next_event_estimation: bool,
+}
+
+impl PathTracer {
+    /// The path tracer with next-event estimation.
+    pub fn new(max_length: u32) -> Self {
+        Self { max_length, next_event_estimation: true }
+    }
+
+    /// Radiance arriving at the camera along `camera_ray`.
+    pub fn radiance(&self, scene: &Scene, camera_ray: Ray, rng: &mut Rng) -> Rgb {
+        radiance(scene, camera_ray, rng, self.max_length, self.next_event_estimation)
+    }
+}
+
+fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee: bool) -> Rgb {
     let sphere = &scene.bounding_sphere;
     let pick_probability = scene.light_pick_probability();
     let mut ray = camera_ray;
@@ -32,7 +57,7 @@ pub fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32) 
             if let Some(light) = scene.background_light()
                 && let Some(emitted) = light.radiance_on_hit(ray.direction, sphere)
             {
-                let weight = if last_specular {
+                let weight = if last_specular || !nee {
                     1.0
                 } else {
                     balance_heuristic(last_pdf, emitted.direct_pdf.0 * pick_probability)
@@ -42,11 +67,11 @@ pub fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32) 
             break;
         };
 
-        // Emitter hit: collect (front side only) and stop; emitters do not scatter.
+        // Emitter hit: collect (front side only).
         if let Some(light_index) = hit.light {
             let light = &scene.lights[light_index as usize];
             if let Some(emitted) = light.radiance_on_hit(ray.direction, sphere) {
-                let weight = if last_specular {
+                let weight = if last_specular || !nee {
                     1.0
                 } else {
                     let distance = hit.distance + origin_offset;
@@ -55,7 +80,6 @@ pub fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32) 
                 };
                 result += throughput * emitted.radiance * weight;
             }
-            break;
         }
         if path_length >= max_length {
             break;
@@ -67,7 +91,8 @@ pub fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32) 
         let continuation = bsdf.continuation_probability();
 
         // Next-event estimation (a path one segment longer).
-        if !bsdf.is_delta()
+        if nee
+            && !bsdf.is_delta()
             && let Some((_, light, pick)) = scene.pick_light(rng.uniform())
         {
             let u = rng.uniform2();

@@ -251,18 +251,19 @@ impl Bsdf {
                 let lobe_axis = self.reflected_fixed();
                 Frame::from_z(lobe_axis).to_world(warp::power_cosine([u[0], u[1]], self.material.phong_exponent))
             };
-            let mut value = Rgb::BLACK;
-            let mut pdf = PdfPair::default();
-            self.add_non_delta(local, &mut value, &mut pdf);
-            if value.is_black() || pdf.forward.0 <= 0.0 {
+            // Evaluate the world direction exactly as `evaluate` would, so that a sample and
+            // the evaluation of its direction always agree (also at the horizon).
+            let direction = self.frame.to_world(local);
+            let eval = self.evaluate(direction)?;
+            if eval.pdf.forward.0 <= 0.0 {
                 return None;
             }
             let lobe = if pick < p.diffuse { LobeKind::Diffuse } else { LobeKind::Glossy };
             return Some(BsdfSample {
-                direction: self.frame.to_world(local),
-                value,
-                cos_generated: local.z.abs(),
-                pdf,
+                direction,
+                value: eval.value,
+                cos_generated: eval.cos_generated,
+                pdf: eval.pdf,
                 lobe,
             });
         }

@@ -1,1 +1,21 @@
-//! placeholder
+//! Statistical test harnesses for the renderer's tests.
+//!
+//! - [`chi2`]: chi-square goodness-of-fit tests of samplers against their pdfs, on the unit
+//!   sphere ([`chi2_sphere`]) and on the unit square ([`chi2_square`]), with [`assert_chi2`] to
+//!   fail a test with a readable table of observed against expected counts.
+//! - [`stats`]: running mean and variance ([`MeanVar`]), two-sided z-tests ([`z_test_p`]), the
+//!   Šidák correction for families of tests ([`sidak`]) and entry-by-entry comparisons of two
+//!   estimates such as two images ([`z_test_entries`]).
+//!
+//! Every test is deterministic: samplers draw from a [`math::Rng`] seeded by the caller, so a
+//! test that passes once passes always. Choose significance levels (say `1e-3`, Šidák-corrected
+//! for several tests) so that a correct sampler fails only on an unlucky seed.
+
+pub mod chi2;
+pub mod stats;
+
+pub use chi2::{
+    Chi2Outcome, Integration, MIN_EXPECTED, PDF_INTEGRAL_TOLERANCE, assert_chi2, chi2_sphere, chi2_sphere_with,
+    chi2_square, chi2_square_with,
+};
+pub use stats::{MeanVar, ZTestOutcome, sidak, z_test_entries, z_test_p};

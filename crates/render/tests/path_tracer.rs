@@ -1,0 +1,170 @@
+//! Tests of the path tracer against independent truths: the analytic furnace, the exact
+//! radiance of an emitter seen directly, an estimator without next-event estimation (which
+//! shares no MIS weights with the full one), and determinism across thread counts.
+
+use math::{Rng, Vec2, Vec3};
+use render::driver::Budget;
+use render::path_tracer::PathTracer;
+use render::{Algorithm, RenderSettings};
+use scene::light::AreaLight;
+use scene::shape::{Shape, Triangle};
+use scene::{Camera, Light, Material, Primitive, Scene, cornell};
+use spectrum::Rgb;
+use testkit::{MeanVar, sidak, z_test_entries};
+
+/// A closed cube whose inner faces all emit `emission` and reflect diffusely with `albedo`.
+fn furnace(emission: f32, albedo: f32) -> Scene {
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let corners = [c(-1., -1., -1.), c(1., -1., -1.), c(1., 1., -1.), c(-1., 1., -1.), c(-1., -1., 1.), c(1., -1., 1.), c(1., 1., 1.), c(-1., 1., 1.)];
+    // Faces as corner quadruples, wound so that normals point into the cube.
+    let faces = [[0, 1, 2, 3], [4, 7, 6, 5], [0, 4, 5, 1], [3, 2, 6, 7], [0, 3, 7, 4], [1, 5, 6, 2]];
+    let mut primitives = Vec::new();
+    let mut lights = Vec::new();
+    for f in faces {
+        for tri in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+            let t = Triangle::new(corners[tri[0]], corners[tri[1]], corners[tri[2]]);
+            assert!(t.normal.dot(-t.p0) > 0.0, "normals point inwards");
+            primitives.push(Primitive { shape: Shape::Triangle(t), material: 0, light: Some(lights.len() as u32) });
+            lights.push(Light::Area(AreaLight::new(t, Rgb::splat(emission))));
+        }
+    }
+    let camera = Camera::new(c(0.2, -0.3, 0.1), c(0.3, 1.0, 0.2), Vec3::Z, 90.0, 16, 16);
+    Scene::new("furnace", primitives, vec![Material::diffuse(Rgb::splat(albedo))], lights, camera)
+}
+
+/// Mean and standard error of `samples` path-traced camera rays through random raster points.
+fn estimate(scene: &Scene, tracer: PathTracer, samples: u64, seed: u64) -> MeanVar {
+    let mut stats = MeanVar::new();
+    let camera = &scene.camera;
+    for i in 0..samples {
+        let mut rng = Rng::for_stream(seed, 0, i);
+        let raster = Vec2::new(rng.uniform() * camera.width as f32, rng.uniform() * camera.height as f32);
+        let value = tracer.radiance(scene, camera.generate_ray(raster), &mut rng);
+        stats.push(value.average() as f64);
+    }
+    stats
+}
+
+#[test]
+fn furnace_gives_the_geometric_series() {
+    // Le·Σ_{k<K} ρ^k for max path length K.
+    let cases = [(1.0f32, 0.5f32, 1u32), (1.0, 0.5, 2), (0.5, 0.8, 3), (1.0, 0.5, 10), (0.25, 0.9, 10)];
+    let tests = cases.len() * 2;
+    for (emission, albedo, max_length) in cases {
+        let scene = furnace(emission, albedo);
+        let expected: f64 = (0..max_length).map(|k| emission as f64 * (albedo as f64).powi(k as i32)).sum();
+        for next_event_estimation in [true, false] {
+            let tracer = PathTracer { max_length, next_event_estimation };
+            let stats = estimate(&scene, tracer, 40_000, 17);
+            let se = stats.std_error();
+            let z = (stats.mean() - expected) / se.max(1e-12);
+            // Two-sided test at family-wise level 1e-3 (Šidák over all cases).
+            let p = testkit::z_test_p(stats.mean() - expected, se);
+            assert!(
+                p > sidak(1e-3, tests) || (stats.mean() - expected).abs() < 1e-6,
+                "Le={emission} ρ={albedo} K={max_length} NEE={next_event_estimation}: {} ± {se} vs {expected} (z = {z:.2})",
+                stats.mean()
+            );
+        }
+    }
+}
+
+#[test]
+fn furnace_with_one_segment_is_exactly_the_emission() {
+    let scene = furnace(0.75, 0.5);
+    let stats = estimate(&scene, PathTracer::new(1), 1000, 3);
+    assert_eq!(stats.mean(), 0.75);
+    assert_eq!(stats.variance(), 0.0);
+}
+
+fn render_image(scene: &Scene, iterations: u64, threads: usize, seed: u64) -> Vec<[f32; 3]> {
+    let settings = RenderSettings {
+        algorithm: Algorithm::PathTracing,
+        budget: Budget::Iterations(iterations),
+        threads,
+        seed,
+        ..RenderSettings::default()
+    };
+    render::render(scene, &settings).unwrap().film.mean()
+}
+
+#[test]
+fn emitter_seen_directly_has_exactly_its_radiance() {
+    let scene = cornell::build(273, 512, 512).unwrap();
+    let image = render_image(&scene, 2, 0, 1);
+    let l = cornell::LIGHT_BOX_RADIANCE;
+    assert_eq!(l, 25.033_298_5);
+    let exact = image.iter().filter(|p| p[0] == l && p[1] == l && p[2] == l).count();
+    // cornell.md §3.9: 1760 pixels of the emitter are fully covered at 512².
+    assert!((1700..=1850).contains(&exact), "{exact} pixels equal the emitter radiance");
+    // And they all lie inside the emitter's projection.
+    let corners: Vec<Vec2> = scene
+        .lights
+        .iter()
+        .flat_map(|l| match l {
+            Light::Area(a) => a.triangle.vertices().to_vec(),
+            _ => vec![],
+        })
+        .map(|p| scene.camera.raster_position(p).unwrap())
+        .collect();
+    let (min, max) = corners.iter().fold((Vec2::splat(f32::MAX), Vec2::splat(f32::MIN)), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let inside = image
+        .iter()
+        .enumerate()
+        .filter(|(i, p)| {
+            let (x, y) = ((i % 512) as f32, (i / 512) as f32);
+            p[0] == l && x >= min.x - 1.0 && x <= max.x && y >= min.y - 1.0 && y <= max.y
+        })
+        .count();
+    // The rest is the emitter's image in the mirror sphere (a perfect mirror keeps L exactly).
+    eprintln!("{exact} pixels equal L, {inside} of them inside the emitter's projection");
+    let box_area = ((max.x - min.x) * (max.y - min.y)) as usize;
+    assert!(inside > box_area / 2 && inside <= box_area + 1, "{inside} of {box_area}");
+}
+
+#[test]
+fn image_does_not_depend_on_the_thread_count() {
+    let scene = cornell::build(450, 48, 40).unwrap();
+    let one = render_image(&scene, 3, 1, 42);
+    let two = render_image(&scene, 3, 2, 42);
+    assert!(one.iter().zip(&two).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits)), "images differ");
+    let other_seed = render_image(&scene, 3, 2, 43);
+    assert_ne!(one, other_seed, "the seed changes the image");
+}
+
+/// Per-block means and standard errors of an estimator over an image, `spp` samples a pixel.
+fn block_statistics(scene: &Scene, tracer: PathTracer, spp: u64, block: u32, seed: u64) -> (Vec<f64>, Vec<f64>) {
+    let camera = &scene.camera;
+    let (bw, bh) = (camera.width / block, camera.height / block);
+    let mut blocks = vec![[MeanVar::new(), MeanVar::new(), MeanVar::new()]; (bw * bh) as usize];
+    for y in 0..camera.height {
+        for x in 0..camera.width {
+            let b = &mut blocks[((y / block) * bw + x / block) as usize];
+            for s in 0..spp {
+                let mut rng = Rng::for_stream(seed, s, (y * camera.width + x) as u64);
+                let raster = Vec2::new(x as f32 + rng.uniform(), y as f32 + rng.uniform());
+                let v = tracer.radiance(scene, camera.generate_ray(raster), &mut rng);
+                for (c, value) in v.to_array().into_iter().enumerate() {
+                    b[c].push(value as f64);
+                }
+            }
+        }
+    }
+    let means = blocks.iter().flat_map(|b| b.iter().map(MeanVar::mean)).collect();
+    let errors = blocks.iter().flat_map(|b| b.iter().map(MeanVar::std_error)).collect();
+    (means, errors)
+}
+
+#[test]
+fn next_event_estimation_and_bsdf_sampling_alone_agree() {
+    // Scenes whose lights BSDF sampling can hit: the area light (1) and the environment (3).
+    for mask in [273, 456] {
+        let scene = cornell::build(mask, 32, 32).unwrap();
+        let (a_mean, a_se) = block_statistics(&scene, PathTracer::new(10), 64, 8, 1);
+        let (b_mean, b_se) = block_statistics(&scene, PathTracer { max_length: 10, next_event_estimation: false }, 256, 8, 2);
+        let outcome = z_test_entries(&a_mean, &a_se, &b_mean, &b_se, 1e-3);
+        assert!(outcome.passed, "mask {mask}: {outcome}");
+        // The test has power: the means are far from zero.
+        assert!(a_mean.iter().sum::<f64>() > 0.1);
+    }
+}
