@@ -73,7 +73,7 @@ struct RenderArgs {
     /// Rendering algorithm.
     #[arg(long, short, value_enum, default_value_t = AlgorithmName::Pt)]
     algorithm: AlgorithmName,
-    /// Number of iterations (one sample per pixel each).
+    /// Number of iterations, one sample per pixel each [default: 64].
     #[arg(long, short, value_name = "N", conflicts_with = "time")]
     iterations: Option<u64>,
     /// Render for this many seconds of wall-clock time instead.
@@ -140,13 +140,17 @@ fn scene_mask(name: &str) -> Result<u32> {
         if !Path::new(name).exists() {
             bail!("scene file '{name}' does not exist (built-in scenes: {})", valid.join(", "));
         }
-        bail!("cannot load '{name}': scene files are not supported yet (issue #4); built-in scenes: {}", valid.join(", "));
+        bail!(
+            "cannot load '{name}': scene files are not supported yet (issue #4); built-in scenes: {}",
+            valid.join(", ")
+        );
     }
     bail!("unknown scene '{name}'; valid scenes: {}", valid.join(", "))
 }
 
 fn build_scene(mask: u32, (width, height): (u32, u32)) -> Result<Scene> {
-    cornell::build(mask, width, height).with_context(|| format!("invalid scene mask {mask}: expected 0-{}", cornell::MAX_MASK))
+    cornell::build(mask, width, height)
+        .with_context(|| format!("invalid scene mask {mask}: expected 0-{}", cornell::MAX_MASK))
 }
 
 /// The files a render writes: the requested one and, for linear formats, a PNG preview.
@@ -187,7 +191,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         (_, Some(t)) => Budget::Time(Duration::from_secs_f64(t)),
         (Some(0), _) => bail!("--iterations must be at least 1"),
         (Some(n), None) => Budget::Iterations(n),
-        (None, None) => Budget::Iterations(16),
+        (None, None) => Budget::Iterations(64),
     };
     let outputs = output_paths(&args.output)?;
     for (path, _) in &outputs {
@@ -243,9 +247,11 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     println!("{:<22} {:>10} {:>14} {:>8}", "scene", "algorithm", "ms/iteration", "threads");
     for builtin in BUILTIN_SCENES {
         let scene = build_scene(builtin.mask, args.resolution)?;
-        let settings = |budget| RenderSettings { algorithm, budget, threads: args.threads, ..RenderSettings::default() };
+        let settings =
+            |budget| RenderSettings { algorithm, budget, threads: args.threads, ..RenderSettings::default() };
         render::render(&scene, &settings(Budget::Iterations(1))).map_err(anyhow::Error::msg)?;
-        let result = render::render(&scene, &settings(Budget::Iterations(args.iterations))).map_err(anyhow::Error::msg)?;
+        let result =
+            render::render(&scene, &settings(Budget::Iterations(args.iterations))).map_err(anyhow::Error::msg)?;
         let ms = 1e3 * result.elapsed.as_secs_f64() / args.iterations as f64;
         println!("{:<22} {:>10} {:>14.1} {:>8}", builtin.name, algorithm.name(), ms, result.threads);
     }

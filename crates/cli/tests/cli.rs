@@ -23,7 +23,8 @@ fn stderr(output: &Output) -> String {
 fn small_render_writes_linear_image_and_preview() {
     let dir = temp_dir("render");
     let out = dir.join("a.pfm");
-    let output = vcm(&["render", "--scene", "1", "-a", "pt", "-i", "2", "-r", "32x24", "-o", out.to_str().unwrap(), "--quiet"]);
+    let output =
+        vcm(&["render", "--scene", "1", "-a", "pt", "-i", "2", "-r", "32x24", "-o", out.to_str().unwrap(), "--quiet"]);
     assert!(output.status.success(), "{}", stderr(&output));
     let image = io::read_image(&out).unwrap();
     assert_eq!((image.width, image.height), (32, 24));
@@ -63,8 +64,14 @@ fn bad_input_fails_clearly() {
     assert_fails(&["render", "--resolution", "0x10", "-o", out], &["invalid resolution"]);
     assert_fails(&["render", "--algorithm", "foo", "-o", out], &["invalid value 'foo'", "pt", "vcm"]);
     assert_fails(&["render", "--scene-mask", "600", "-i", "1", "-o", out], &["invalid scene mask 600"]);
-    assert_fails(&["render", "-i", "1", "-o", "/nonexistent-dir/x.exr"], &["cannot write output '/nonexistent-dir/x.exr'"]);
-    assert_fails(&["render", "-i", "1", "-o", dir.join("x.bmp").to_str().unwrap()], &["unsupported image extension '.bmp'"]);
+    assert_fails(
+        &["render", "-i", "1", "-o", "/nonexistent-dir/x.exr"],
+        &["cannot write output '/nonexistent-dir/x.exr'"],
+    );
+    assert_fails(
+        &["render", "-i", "1", "-o", dir.join("x.bmp").to_str().unwrap()],
+        &["unsupported image extension '.bmp'"],
+    );
     assert_fails(&["render", "--scene", "missing.xml", "-o", out], &["scene file 'missing.xml' does not exist"]);
     assert_fails(&["render", "--time", "0", "-o", out], &["--time must be a positive number"]);
     assert!(!std::path::Path::new(out).exists(), "nothing was written");

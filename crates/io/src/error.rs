@@ -88,33 +88,19 @@ pub enum ImageError {
 
 impl ImageError {
     pub(crate) fn read(path: &Path, cause: std::io::Error) -> Self {
-        Self::Read {
-            path: path.to_path_buf(),
-            cause,
-        }
+        Self::Read { path: path.to_path_buf(), cause }
     }
 
     pub(crate) fn write(path: &Path, cause: std::io::Error) -> Self {
-        Self::Write {
-            path: path.to_path_buf(),
-            cause,
-        }
+        Self::Write { path: path.to_path_buf(), cause }
     }
 
     pub(crate) fn decode(path: &Path, format: ImageFormat, message: impl Into<String>) -> Self {
-        Self::Decode {
-            path: path.to_path_buf(),
-            format,
-            message: message.into(),
-        }
+        Self::Decode { path: path.to_path_buf(), format, message: message.into() }
     }
 
     pub(crate) fn encode(path: &Path, format: ImageFormat, message: impl Into<String>) -> Self {
-        Self::Encode {
-            path: path.to_path_buf(),
-            format,
-            message: message.into(),
-        }
+        Self::Encode { path: path.to_path_buf(), format, message: message.into() }
     }
 
     /// The path of the file involved, if any.

@@ -32,17 +32,11 @@ pub(crate) fn write(path: &Path, image: &Image) -> Result<(), ImageError> {
         let [r, g, b] = image.pixels[y * image.width + x];
         (r, g, b)
     });
-    let exr_image = exr::image::Image::from_encoded_channels(
-        (image.width, image.height),
-        Encoding::SMALL_LOSSLESS,
-        channels,
-    );
+    let exr_image =
+        exr::image::Image::from_encoded_channels((image.width, image.height), Encoding::SMALL_LOSSLESS, channels);
     let file = File::create(path).map_err(|e| ImageError::write(path, e))?;
     let mut out = BufWriter::new(file);
-    exr_image
-        .write()
-        .to_buffered(&mut out)
-        .map_err(|e| convert(path, e, true))?;
+    exr_image.write().to_buffered(&mut out).map_err(|e| convert(path, e, true))?;
     out.flush().map_err(|e| ImageError::write(path, e))
 }
 
@@ -52,8 +46,7 @@ pub(crate) fn read(path: &Path) -> Result<Image, ImageError> {
     let mut input = BufReader::new(file);
 
     // Check the declared sizes before the decoder allocates anything.
-    let meta = exr::meta::MetaData::read_from_buffered(&mut input, false)
-        .map_err(|e| convert(path, e, false))?;
+    let meta = exr::meta::MetaData::read_from_buffered(&mut input, false).map_err(|e| convert(path, e, false))?;
     for header in meta.headers.iter() {
         let Vec2(w, h) = header.layer_size;
         if w.checked_mul(h).is_none_or(|n| n > MAX_PIXELS) {
@@ -64,9 +57,7 @@ pub(crate) fn read(path: &Path) -> Result<Image, ImageError> {
             ));
         }
     }
-    input
-        .seek(SeekFrom::Start(0))
-        .map_err(|e| ImageError::read(path, e))?;
+    input.seek(SeekFrom::Start(0)).map_err(|e| ImageError::read(path, e))?;
 
     let decoded = exr::image::read::read()
         .no_deep_data()

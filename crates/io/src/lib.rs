@@ -45,9 +45,7 @@ impl ImageFormat {
     /// [`ImageError::MissingExtension`].
     pub fn from_path(path: &Path) -> Result<Self, ImageError> {
         let Some(extension) = path.extension() else {
-            return Err(ImageError::MissingExtension {
-                path: path.to_path_buf(),
-            });
+            return Err(ImageError::MissingExtension { path: path.to_path_buf() });
         };
         let extension = extension.to_string_lossy();
         match extension.to_ascii_lowercase().as_str() {
@@ -55,10 +53,7 @@ impl ImageFormat {
             "pfm" => Ok(Self::Pfm),
             "hdr" => Ok(Self::Hdr),
             "png" => Ok(Self::Png),
-            _ => Err(ImageError::UnsupportedExtension {
-                path: path.to_path_buf(),
-                extension: extension.into_owned(),
-            }),
+            _ => Err(ImageError::UnsupportedExtension { path: path.to_path_buf(), extension: extension.into_owned() }),
         }
     }
 
@@ -108,9 +103,7 @@ pub struct WriteOptions {
 /// file behind.
 pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result<(), ImageError> {
     let format = ImageFormat::from_path(path)?;
-    image
-        .check_shape()
-        .map_err(|message| ImageError::encode(path, format, message))?;
+    image.check_shape().map_err(|message| ImageError::encode(path, format, message))?;
     match format {
         ImageFormat::Exr => exr_file::write(path, image),
         ImageFormat::Pfm => pfm::write(path, image),

@@ -33,14 +33,8 @@ impl Image {
     ///
     /// Panics if `width * height` overflows `usize`.
     pub fn new(width: usize, height: usize) -> Self {
-        let count = width
-            .checked_mul(height)
-            .expect("image dimensions overflow usize");
-        Self {
-            width,
-            height,
-            pixels: vec![[0.0; 3]; count],
-        }
+        let count = width.checked_mul(height).expect("image dimensions overflow usize");
+        Self { width, height, pixels: vec![[0.0; 3]; count] }
     }
 
     /// An image whose pixel `(x, y)` is `f(x, y)`.
@@ -48,11 +42,7 @@ impl Image {
     /// # Panics
     ///
     /// Panics if `width * height` overflows `usize`.
-    pub fn from_fn(
-        width: usize,
-        height: usize,
-        mut f: impl FnMut(usize, usize) -> [f32; 3],
-    ) -> Self {
+    pub fn from_fn(width: usize, height: usize, mut f: impl FnMut(usize, usize) -> [f32; 3]) -> Self {
         let mut image = Self::new(width, height);
         for y in 0..height {
             for x in 0..width {
@@ -68,12 +58,7 @@ impl Image {
     ///
     /// Panics if `(x, y)` is outside the image.
     pub fn get(&self, x: usize, y: usize) -> [f32; 3] {
-        assert!(
-            x < self.width && y < self.height,
-            "pixel ({x}, {y}) outside {}x{} image",
-            self.width,
-            self.height
-        );
+        assert!(x < self.width && y < self.height, "pixel ({x}, {y}) outside {}x{} image", self.width, self.height);
         self.pixels[y * self.width + x]
     }
 
@@ -83,12 +68,7 @@ impl Image {
     ///
     /// Panics if `(x, y)` is outside the image.
     pub fn set(&mut self, x: usize, y: usize, value: [f32; 3]) {
-        assert!(
-            x < self.width && y < self.height,
-            "pixel ({x}, {y}) outside {}x{} image",
-            self.width,
-            self.height
-        );
+        assert!(x < self.width && y < self.height, "pixel ({x}, {y}) outside {}x{} image", self.width, self.height);
         self.pixels[y * self.width + x] = value;
     }
 
@@ -118,12 +98,7 @@ impl Image {
         }
         match self.width.checked_mul(self.height) {
             Some(n) if n == self.pixels.len() => Ok(()),
-            _ => Err(format!(
-                "image is {}x{} but has {} pixels",
-                self.width,
-                self.height,
-                self.pixels.len()
-            )),
+            _ => Err(format!("image is {}x{} but has {} pixels", self.width, self.height, self.pixels.len())),
         }
     }
 }
@@ -134,10 +109,7 @@ impl Image {
 /// Errors if `factor` is zero, if the width or height is not divisible by
 /// `factor`, or if the image's pixel buffer does not match its dimensions.
 pub fn downsample_box(image: &Image, factor: usize) -> Result<Image, ImageError> {
-    let fail = |message: String| ImageError::InvalidOperation {
-        operation: "downsample_box",
-        message,
-    };
+    let fail = |message: String| ImageError::InvalidOperation { operation: "downsample_box", message };
     if factor == 0 {
         return Err(fail("factor must be at least 1".to_string()));
     }

@@ -41,14 +41,8 @@ pub(crate) fn write(path: &Path, image: &Image) -> Result<(), ImageError> {
 pub(crate) fn read(path: &Path) -> Result<Image, ImageError> {
     let malformed = |message: String| ImageError::decode(path, ImageFormat::Pfm, message);
     let file = File::open(path).map_err(|e| ImageError::read(path, e))?;
-    let file_len = file
-        .metadata()
-        .map_err(|e| ImageError::read(path, e))?
-        .len();
-    let mut reader = HeaderReader {
-        inner: BufReader::new(file),
-        consumed: 0,
-    };
+    let file_len = file.metadata().map_err(|e| ImageError::read(path, e))?.len();
+    let mut reader = HeaderReader { inner: BufReader::new(file), consumed: 0 };
 
     let magic = reader.read_magic().map_err(|e| ImageError::read(path, e))?;
     let channels = match &magic[..] {
@@ -63,17 +57,13 @@ pub(crate) fn read(path: &Path) -> Result<Image, ImageError> {
     };
     let after_magic = reader.read_byte().map_err(|e| ImageError::read(path, e))?;
     if !after_magic.is_some_and(|b| b.is_ascii_whitespace()) {
-        return Err(malformed(
-            "malformed header: expected whitespace after the magic 'PF'/'Pf'".to_string(),
-        ));
+        return Err(malformed("malformed header: expected whitespace after the magic 'PF'/'Pf'".to_string()));
     }
 
     let mut token = |what: &str| -> Result<String, ImageError> {
         match reader.read_token().map_err(|e| ImageError::read(path, e))? {
             Token::Text(t) => Ok(t),
-            Token::Eof => Err(malformed(format!(
-                "malformed header: file ends before the {what}"
-            ))),
+            Token::Eof => Err(malformed(format!("malformed header: file ends before the {what}"))),
             Token::TooLong(prefix) => Err(malformed(format!(
                 "malformed header: expected the {what}, found an overlong token starting '{}'",
                 prefix.escape_ascii()
@@ -110,11 +100,7 @@ pub(crate) fn read(path: &Path) -> Result<Image, ImageError> {
     let pixel_count = width
         .checked_mul(height)
         .filter(|&n| n <= MAX_PIXELS)
-        .ok_or_else(|| {
-            malformed(format!(
-                "dimensions {width}x{height} exceed the limit of {MAX_PIXELS} pixels"
-            ))
-        })?;
+        .ok_or_else(|| malformed(format!("dimensions {width}x{height} exceed the limit of {MAX_PIXELS} pixels")))?;
     let expected = pixel_count * channels * 4;
     let available = file_len.saturating_sub(reader.consumed);
     if available < expected as u64 {
@@ -131,18 +117,11 @@ pub(crate) fn read(path: &Path) -> Result<Image, ImageError> {
     }
 
     let mut data = vec![0u8; expected];
-    reader
-        .inner
-        .read_exact(&mut data)
-        .map_err(|e| ImageError::read(path, e))?;
+    reader.inner.read_exact(&mut data).map_err(|e| ImageError::read(path, e))?;
 
     let decode = |bytes: &[u8]| {
         let b = [bytes[0], bytes[1], bytes[2], bytes[3]];
-        if little_endian {
-            f32::from_le_bytes(b)
-        } else {
-            f32::from_be_bytes(b)
-        }
+        if little_endian { f32::from_le_bytes(b) } else { f32::from_be_bytes(b) }
     };
     let mut image = Image::new(width, height);
     let row_len = width * channels * 4;
@@ -151,11 +130,7 @@ pub(crate) fn read(path: &Path) -> Result<Image, ImageError> {
         let row = &mut image.pixels[y * width..(y + 1) * width];
         for (pixel, sample_bytes) in row.iter_mut().zip(bytes.chunks_exact(channels * 4)) {
             *pixel = if channels == 3 {
-                [
-                    decode(&sample_bytes[0..4]),
-                    decode(&sample_bytes[4..8]),
-                    decode(&sample_bytes[8..12]),
-                ]
+                [decode(&sample_bytes[0..4]), decode(&sample_bytes[4..8]), decode(&sample_bytes[8..12])]
             } else {
                 [decode(sample_bytes); 3]
             };

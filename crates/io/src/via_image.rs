@@ -28,12 +28,7 @@ fn image_crate_format(format: ImageFormat) -> image::ImageFormat {
 
 /// Turns an `image` crate error into ours: I/O failures keep their
 /// `io::Error`, everything else is a content problem.
-fn convert(
-    path: &Path,
-    format: ImageFormat,
-    error: image::ImageError,
-    writing: bool,
-) -> ImageError {
+fn convert(path: &Path, format: ImageFormat, error: image::ImageError, writing: bool) -> ImageError {
     match error {
         image::ImageError::IoError(cause) if writing => ImageError::write(path, cause),
         image::ImageError::IoError(cause) => ImageError::read(path, cause),
@@ -45,18 +40,8 @@ fn convert(
 /// Makes a value representable in RGBE: NaN and negatives become 0, huge
 /// values (including +∞) are clamped.
 fn rgbe_sanitize(pixel: [f32; 3]) -> Rgb<f32> {
-    let clean = pixel.map(|v| {
-        if v.is_nan() {
-            0.0
-        } else {
-            v.clamp(0.0, RGBE_MAX)
-        }
-    });
-    if clean.iter().all(|&v| v < RGBE_MIN) {
-        Rgb([0.0; 3])
-    } else {
-        Rgb(clean)
-    }
+    let clean = pixel.map(|v| if v.is_nan() { 0.0 } else { v.clamp(0.0, RGBE_MAX) });
+    if clean.iter().all(|&v| v < RGBE_MIN) { Rgb([0.0; 3]) } else { Rgb(clean) }
 }
 
 /// Writes `image` as Radiance RGBE. The image's shape must already have been
@@ -73,27 +58,13 @@ pub(crate) fn write_hdr(path: &Path, image: &Image) -> Result<(), ImageError> {
 
 /// Writes `image` as 8-bit sRGB PNG after scaling by `2^exposure_stops`.
 /// The image's shape must already have been checked.
-pub(crate) fn write_png(
-    path: &Path,
-    image: &Image,
-    options: &WriteOptions,
-) -> Result<(), ImageError> {
-    let too_large = || {
-        ImageError::encode(
-            path,
-            ImageFormat::Png,
-            format!("{}x{} is too large for PNG", image.width, image.height),
-        )
-    };
+pub(crate) fn write_png(path: &Path, image: &Image, options: &WriteOptions) -> Result<(), ImageError> {
+    let too_large =
+        || ImageError::encode(path, ImageFormat::Png, format!("{}x{} is too large for PNG", image.width, image.height));
     let width = u32::try_from(image.width).map_err(|_| too_large())?;
     let height = u32::try_from(image.height).map_err(|_| too_large())?;
     let scale = 2f64.powf(f64::from(options.exposure_stops));
-    let bytes: Vec<u8> = image
-        .pixels
-        .iter()
-        .flatten()
-        .map(|&v| linear_to_srgb8(f64::from(v) * scale))
-        .collect();
+    let bytes: Vec<u8> = image.pixels.iter().flatten().map(|&v| linear_to_srgb8(f64::from(v) * scale)).collect();
     let file = File::create(path).map_err(|e| ImageError::write(path, e))?;
     let mut out = BufWriter::new(file);
     PngEncoder::new(&mut out)
@@ -112,16 +83,10 @@ pub(crate) fn read(path: &Path, format: ImageFormat) -> Result<Image, ImageError
     // image we accept.
     limits.max_alloc = Some(MAX_PIXELS as u64 * 16);
     reader.limits(limits);
-    let decoded = reader
-        .decode()
-        .map_err(|e| convert(path, format, e, false))?;
+    let decoded = reader.decode().map_err(|e| convert(path, format, e, false))?;
     let (width, height) = (decoded.width() as usize, decoded.height() as usize);
     if width == 0 || height == 0 {
-        return Err(ImageError::decode(
-            path,
-            format,
-            format!("image is empty ({width}x{height})"),
-        ));
+        return Err(ImageError::decode(path, format, format!("image is empty ({width}x{height})")));
     }
     if width.checked_mul(height).is_none_or(|n| n > MAX_PIXELS) {
         return Err(ImageError::decode(
@@ -136,9 +101,5 @@ pub(crate) fn read(path: &Path, format: ImageFormat) -> Result<Image, ImageError
         _ => v,
     };
     let pixels = float.pixels().map(|p| p.0.map(linearize)).collect();
-    Ok(Image {
-        width,
-        height,
-        pixels,
-    })
+    Ok(Image { width, height, pixels })
 }

@@ -3,17 +3,12 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use io::{
-    Image, ImageError, ImageFormat, WriteOptions, downsample_box, linear_to_srgb8, read_image,
-    write_image,
-};
+use io::{Image, ImageError, ImageFormat, WriteOptions, downsample_box, linear_to_srgb8, read_image, write_image};
 
 /// A fresh, empty directory for one test under Cargo's per-target temp dir
 /// (emptied at the start of each run, left behind for inspection).
 fn scratch_dir(test: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("vcm-io-tests")
-        .join(test);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("vcm-io-tests").join(test);
     let _ = fs::remove_dir_all(&dir);
     fs::create_dir_all(&dir).unwrap();
     dir
@@ -41,11 +36,7 @@ fn awkward_image() -> Image {
 fn assert_bit_exact(a: &Image, b: &Image) {
     assert_eq!((a.width, a.height), (b.width, b.height));
     for (i, (pa, pb)) in a.pixels.iter().zip(&b.pixels).enumerate() {
-        assert_eq!(
-            pa.map(f32::to_bits),
-            pb.map(f32::to_bits),
-            "pixel {i}: {pa:?} vs {pb:?}"
-        );
+        assert_eq!(pa.map(f32::to_bits), pb.map(f32::to_bits), "pixel {i}: {pa:?} vs {pb:?}");
     }
 }
 
@@ -84,12 +75,7 @@ fn hdr_round_trip_is_within_rgbe_precision() {
             // RGBE truncates each channel to 8 bits relative to 2^e > max.
             let tolerance = a.iter().copied().fold(0.0f32, f32::max) / 128.0;
             for c in 0..3 {
-                assert!(
-                    (a[c] - b[c]).abs() <= tolerance,
-                    "pixel {i} channel {c}: wrote {} read {}",
-                    a[c],
-                    b[c]
-                );
+                assert!((a[c] - b[c]).abs() <= tolerance, "pixel {i} channel {c}: wrote {} read {}", a[c], b[c]);
             }
         }
     }
@@ -127,10 +113,7 @@ fn pfm_layout_is_standard() {
     assert_eq!(&bytes[..header.len()], header);
     let data = &bytes[header.len()..];
     assert_eq!(data.len(), 2 * 3 * 3 * 4);
-    let samples: Vec<f32> = data
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect();
+    let samples: Vec<f32> = data.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
     // First stored row is the bottom row (y = 2), left to right.
     assert_eq!(&samples[0..6], &[20.0, 20.25, 20.5, 21.0, 21.25, 21.5]);
     // Last stored row is the top row (y = 0).
@@ -143,10 +126,7 @@ fn pfm_reads_big_endian_and_greyscale() {
 
     // 2x2 RGB, big-endian (positive scale, magnitude ignored).
     let mut bytes = b"PF 2 2 4.5\n".to_vec();
-    let rows_bottom_first = [
-        [[1.0f32, 2.0, 3.0], [4.0, 5.0, 6.0]],
-        [[7.0, 8.0, 9.0], [10.0, 11.0, 12.0]],
-    ];
+    let rows_bottom_first = [[[1.0f32, 2.0, 3.0], [4.0, 5.0, 6.0]], [[7.0, 8.0, 9.0], [10.0, 11.0, 12.0]]];
     for row in rows_bottom_first {
         for sample in row.iter().flatten() {
             bytes.extend_from_slice(&sample.to_be_bytes());
@@ -216,25 +196,11 @@ fn png_applies_exposure_clamp_and_srgb() {
     assert_eq!(&codes[0..9], &[0, 10, 188, 255, 255, 0, 0, 255, 137]);
 
     // +1 stop doubles before encoding: 0.25 -> 0.5, 0.0015654 -> 0.0031308.
-    write_image(
-        &path,
-        &image,
-        &WriteOptions {
-            exposure_stops: 1.0,
-        },
-    )
-    .unwrap();
+    write_image(&path, &image, &WriteOptions { exposure_stops: 1.0 }).unwrap();
     let (_, _, codes) = png_codes(&path);
     assert_eq!(&codes[9..12], &[188, 137, 10]);
     // -1 stop halves: 1.0 -> 0.5, 2.0 -> 1.0.
-    write_image(
-        &path,
-        &image,
-        &WriteOptions {
-            exposure_stops: -1.0,
-        },
-    )
-    .unwrap();
+    write_image(&path, &image, &WriteOptions { exposure_stops: -1.0 }).unwrap();
     let (_, _, codes) = png_codes(&path);
     assert_eq!(&codes[3..5], &[188, 255]);
 }
@@ -260,34 +226,14 @@ fn png_reads_back_as_linear() {
 
 #[test]
 fn extension_is_case_insensitive_and_checked() {
-    assert_eq!(
-        ImageFormat::from_path(Path::new("a/b.EXR")).unwrap(),
-        ImageFormat::Exr
-    );
-    assert_eq!(
-        ImageFormat::from_path(Path::new("b.Pfm")).unwrap(),
-        ImageFormat::Pfm
-    );
-    assert_eq!(
-        ImageFormat::from_path(Path::new("b.hdr")).unwrap(),
-        ImageFormat::Hdr
-    );
-    assert_eq!(
-        ImageFormat::from_path(Path::new("b.PNG")).unwrap(),
-        ImageFormat::Png
-    );
+    assert_eq!(ImageFormat::from_path(Path::new("a/b.EXR")).unwrap(), ImageFormat::Exr);
+    assert_eq!(ImageFormat::from_path(Path::new("b.Pfm")).unwrap(), ImageFormat::Pfm);
+    assert_eq!(ImageFormat::from_path(Path::new("b.hdr")).unwrap(), ImageFormat::Hdr);
+    assert_eq!(ImageFormat::from_path(Path::new("b.PNG")).unwrap(), ImageFormat::Png);
 
-    let error = write_image(
-        Path::new("a.bmp"),
-        &Image::new(1, 1),
-        &WriteOptions::default(),
-    )
-    .unwrap_err();
+    let error = write_image(Path::new("a.bmp"), &Image::new(1, 1), &WriteOptions::default()).unwrap_err();
     assert!(matches!(error, ImageError::UnsupportedExtension { .. }));
-    assert_eq!(
-        error.to_string(),
-        "unsupported image extension '.bmp' in 'a.bmp' (expected .exr, .pfm, .hdr or .png)"
-    );
+    assert_eq!(error.to_string(), "unsupported image extension '.bmp' in 'a.bmp' (expected .exr, .pfm, .hdr or .png)");
     assert!(!Path::new("a.bmp").exists());
 
     let error = read_image(Path::new("noext")).unwrap_err();
@@ -308,10 +254,7 @@ fn unwritable_path_names_the_file() {
             other => panic!("expected a write error for .{ext}, got {other:?}"),
         }
         let message = error.to_string();
-        assert!(
-            message.starts_with(&format!("cannot write '{}': ", path.display())),
-            "{message}"
-        );
+        assert!(message.starts_with(&format!("cannot write '{}': ", path.display())), "{message}");
     }
 }
 
@@ -322,11 +265,7 @@ fn missing_file_names_the_file() {
         let path = dir.join(format!("absent.{ext}"));
         let error = read_image(&path).unwrap_err();
         assert!(matches!(error, ImageError::Read { .. }), "{error:?}");
-        assert!(
-            error
-                .to_string()
-                .starts_with(&format!("cannot read '{}': ", path.display()))
-        );
+        assert!(error.to_string().starts_with(&format!("cannot read '{}': ", path.display())));
     }
 }
 
@@ -337,16 +276,9 @@ fn invalid_images_are_refused() {
     let empty = Image::new(0, 4);
     let error = write_image(&path, &empty, &WriteOptions::default()).unwrap_err();
     assert!(error.to_string().contains("empty"), "{error}");
-    let wrong = Image {
-        width: 3,
-        height: 2,
-        pixels: vec![[0.0; 3]; 5],
-    };
+    let wrong = Image { width: 3, height: 2, pixels: vec![[0.0; 3]; 5] };
     let error = write_image(&path, &wrong, &WriteOptions::default()).unwrap_err();
-    assert!(
-        error.to_string().contains("3x2 but has 5 pixels"),
-        "{error}"
-    );
+    assert!(error.to_string().contains("3x2 but has 5 pixels"), "{error}");
     assert!(!path.exists());
 }
 
@@ -358,13 +290,7 @@ fn truncated_pfm_is_an_error() {
     let bytes = fs::read(&path).unwrap();
     fs::write(&path, &bytes[..bytes.len() - 7]).unwrap();
     let error = read_image(&path).unwrap_err();
-    assert!(matches!(
-        error,
-        ImageError::Decode {
-            format: ImageFormat::Pfm,
-            ..
-        }
-    ));
+    assert!(matches!(error, ImageError::Decode { format: ImageFormat::Pfm, .. }));
     let message = error.to_string();
     assert!(message.contains(&path.display().to_string()), "{message}");
     assert!(message.contains("truncated"), "{message}");
@@ -383,24 +309,12 @@ fn malformed_pfm_headers_explain_what_was_expected() {
     let dir = scratch_dir("malformed_pfm");
     let path = dir.join("bad.pfm");
     let cases: [(&[u8], &str); 9] = [
-        (
-            b"",
-            "expected magic 'PF' (RGB) or 'Pf' (greyscale), found ''",
-        ),
-        (
-            b"P6\n2 2\n255\n",
-            "expected magic 'PF' (RGB) or 'Pf' (greyscale), found 'P6'",
-        ),
+        (b"", "expected magic 'PF' (RGB) or 'Pf' (greyscale), found ''"),
+        (b"P6\n2 2\n255\n", "expected magic 'PF' (RGB) or 'Pf' (greyscale), found 'P6'"),
         (b"PFX 2 2 -1\n", "expected whitespace after the magic"),
         (b"PF\n", "file ends before the width"),
-        (
-            b"PF\n0 2\n-1\n",
-            "expected a positive integer width, found '0'",
-        ),
-        (
-            b"PF\n2 x\n-1\n",
-            "expected a positive integer height, found 'x'",
-        ),
+        (b"PF\n0 2\n-1\n", "expected a positive integer width, found '0'"),
+        (b"PF\n2 x\n-1\n", "expected a positive integer height, found 'x'"),
         (b"PF\n2 2\n0\n", "expected a finite non-zero scale"),
         (b"PF\n99999999999 99999999999\n-1\n", "exceed the limit"),
         (b"PF\n10000 10000\n-1\n", "truncated pixel data"),
@@ -409,11 +323,7 @@ fn malformed_pfm_headers_explain_what_was_expected() {
         fs::write(&path, bytes).unwrap();
         let error = read_image(&path).unwrap_err();
         let message = error.to_string();
-        assert!(
-            message.contains(expected),
-            "{:?}: {message}",
-            bytes.escape_ascii().to_string()
-        );
+        assert!(message.contains(expected), "{:?}: {message}", bytes.escape_ascii().to_string());
         assert!(message.contains("bad.pfm"), "{message}");
     }
 }
@@ -428,20 +338,12 @@ fn corrupt_files_of_every_format_give_errors() {
         let bytes = fs::read(&path).unwrap();
         // A PNG missing only the end of its IEND chunk still holds every
         // pixel and decodes, so cut PNGs deeper.
-        let last = if ext == "png" {
-            bytes.len() - 13
-        } else {
-            bytes.len() - 1
-        };
+        let last = if ext == "png" { bytes.len() - 13 } else { bytes.len() - 1 };
         for keep in [0, 1, 3, bytes.len() / 2, last] {
             fs::write(&path, &bytes[..keep]).unwrap();
-            let error = read_image(&path)
-                .map(|_| ())
-                .expect_err(&format!(".{ext} cut to {keep} of {} bytes", bytes.len()));
-            assert!(
-                error.to_string().contains(&path.display().to_string()),
-                "{error}"
-            );
+            let error =
+                read_image(&path).map(|_| ()).expect_err(&format!(".{ext} cut to {keep} of {} bytes", bytes.len()));
+            assert!(error.to_string().contains(&path.display().to_string()), "{error}");
         }
         fs::write(&path, b"this is not an image file at all, just text").unwrap();
         assert!(read_image(&path).is_err());
@@ -462,12 +364,7 @@ fn channel_means_and_downsampling() {
     assert_eq!(downsample_box(&image, 1).unwrap(), image);
 
     let error = downsample_box(&image, 3).unwrap_err();
-    assert!(
-        error
-            .to_string()
-            .contains("4x2 image is not divisible into 3x3 blocks"),
-        "{error}"
-    );
+    assert!(error.to_string().contains("4x2 image is not divisible into 3x3 blocks"), "{error}");
     assert!(downsample_box(&image, 0).is_err());
 }
 
@@ -478,9 +375,7 @@ fn corrupted_bytes_never_panic() {
     // Small deterministic generator (64-bit LCG, high bits).
     let mut state = 0x2545_f491_4f6c_dd1d_u64;
     let mut next = move |bound: usize| {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
+        state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
         ((state >> 33) as usize) % bound
     };
     for ext in ["exr", "pfm", "hdr", "png"] {

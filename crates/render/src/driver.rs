@@ -157,7 +157,9 @@ fn render_iteration(scene: &Scene, settings: &RenderSettings, iteration: u64, fr
                 let raster = Vec2::new(x as f32 + rng.uniform(), y as f32 + rng.uniform());
                 let ray = scene.camera.generate_ray(raster);
                 let value = match settings.algorithm {
-                    Algorithm::PathTracing => path_tracer::PathTracer::new(settings.max_length).radiance(scene, ray, &mut rng),
+                    Algorithm::PathTracing => {
+                        path_tracer::PathTracer::new(settings.max_length).radiance(scene, ray, &mut rng)
+                    }
                     Algorithm::EyeLight => eye_light::eye_light(scene, &ray),
                 };
                 *pixel = if value.is_finite() {

@@ -101,7 +101,11 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
                 && !scene.occluded(hit.position, direct.direction, direct.distance)
             {
                 let light_pdf = direct.direct_pdf.0 * pick;
-                let weight = if light.is_delta() { 1.0 } else { balance_heuristic(light_pdf, eval.pdf.forward.0 * continuation) };
+                let weight = if light.is_delta() {
+                    1.0
+                } else {
+                    balance_heuristic(light_pdf, eval.pdf.forward.0 * continuation)
+                };
                 result += throughput * direct.radiance * eval.value * (eval.cos_generated * weight / light_pdf);
             }
         }

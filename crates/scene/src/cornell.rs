@@ -44,10 +44,30 @@ pub struct BuiltinScene {
 
 /// The four reference scenes, in id order.
 pub const BUILTIN_SCENES: [BuiltinScene; 4] = [
-    BuiltinScene { id: 0, name: "cornell-sun", mask: 450, description: "glossy floor, mirror and glass spheres, directional sun through the open front" },
-    BuiltinScene { id: 1, name: "cornell-area-mirror", mask: 273, description: "glossy floor, large mirror sphere, area light under the ceiling" },
-    BuiltinScene { id: 2, name: "cornell-point", mask: 452, description: "glossy floor, mirror and glass spheres, point light" },
-    BuiltinScene { id: 3, name: "cornell-env", mask: 456, description: "glossy floor, mirror and glass spheres, constant sky-blue environment" },
+    BuiltinScene {
+        id: 0,
+        name: "cornell-sun",
+        mask: 450,
+        description: "glossy floor, mirror and glass spheres, directional sun through the open front",
+    },
+    BuiltinScene {
+        id: 1,
+        name: "cornell-area-mirror",
+        mask: 273,
+        description: "glossy floor, large mirror sphere, area light under the ceiling",
+    },
+    BuiltinScene {
+        id: 2,
+        name: "cornell-point",
+        mask: 452,
+        description: "glossy floor, mirror and glass spheres, point light",
+    },
+    BuiltinScene {
+        id: 3,
+        name: "cornell-env",
+        mask: 456,
+        description: "glossy floor, mirror and glass spheres, constant sky-blue environment",
+    },
 ];
 
 /// Largest valid mask value (all bits set).
@@ -71,13 +91,13 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
     // Materials M0–M8 (cornell.md §3.5).
     let grey = |x: f32| Rgb::splat(x);
     let materials = vec![
-        Material::BLACK,                                       // M0 emitter triangle 1
-        Material::BLACK,                                       // M1 emitter triangle 2
+        Material::BLACK, // M0 emitter triangle 1
+        Material::BLACK, // M1 emitter triangle 2
         Material { diffuse: grey(0.1), phong: grey(0.7), phong_exponent: 90.0, ..Material::BLACK }, // M2 glossy floor
         Material::diffuse(Rgb::new(0.156863, 0.803922, 0.172549)), // M3 green
         Material::diffuse(Rgb::new(0.803922, 0.152941, 0.152941)), // M4 red
-        Material::diffuse(grey(0.803922)),                     // M5 white
-        Material { mirror: grey(1.0), ..Material::BLACK },     // M6 mirror
+        Material::diffuse(grey(0.803922)), // M5 white
+        Material { mirror: grey(1.0), ..Material::BLACK }, // M6 mirror
         Material { mirror: grey(1.0), ior: 1.6, ..Material::BLACK }, // M7 glass
         Material::diffuse(Rgb::new(0.156863, 0.172549, 0.803922)), // M8 blue
     ];
@@ -193,7 +213,8 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
     }
 
     // Lights in the order area(s), sun, point, background (§3.8).
-    let emitter_radiance = if whole_ceiling_emits { Rgb::splat(3.0 / math::PI) } else { Rgb::splat(LIGHT_BOX_RADIANCE) };
+    let emitter_radiance =
+        if whole_ceiling_emits { Rgb::splat(3.0 / math::PI) } else { Rgb::splat(LIGHT_BOX_RADIANCE) };
     if whole_ceiling_emits || light_box_emits {
         let n = primitives.len();
         let emitters = if whole_ceiling_emits { [4, 5] } else { [n - 2, n - 1] };
@@ -207,7 +228,10 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
         lights.push(Light::Directional(DirectionalLight::new(v(-1.0, 1.5, -1.0), Rgb::new(0.5, 0.2, 0.0) * 20.0)));
     }
     if has(POINT_LIGHT) {
-        lights.push(Light::Point(PointLight { position: v(0.0, -0.5, 1.0), intensity: Rgb::splat(70.0 * (0.25 * math::INV_PI)) }));
+        lights.push(Light::Point(PointLight {
+            position: v(0.0, -0.5, 1.0),
+            intensity: Rgb::splat(70.0 * (0.25 * math::INV_PI)),
+        }));
     }
     if has(BACKGROUND) {
         lights.push(Light::Background(BackgroundLight { radiance: Rgb::new(135.0, 206.0, 250.0) / 255.0 }));
@@ -222,7 +246,10 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
         width,
         height,
     );
-    let name = BUILTIN_SCENES.iter().find(|s| s.mask == mask).map_or_else(|| format!("cornell-mask-{mask}"), |s| s.name.to_string());
+    let name = BUILTIN_SCENES
+        .iter()
+        .find(|s| s.mask == mask)
+        .map_or_else(|| format!("cornell-mask-{mask}"), |s| s.name.to_string());
     Some(Scene::new(name, primitives, materials, lights, camera))
 }
 
@@ -250,8 +277,10 @@ mod tests {
     #[test]
     fn sphere_centres_are_bit_exact() {
         // cornell.md §3.3, hex floats.
-        let small_mirror = Vec3::new(-f32::from_bits(0x3f09_f213), f32::from_bits(0x3cc8_f340), -f32::from_bits(0x3f47_af64));
-        let small_glass = Vec3::new(f32::from_bits(0x3f0e_ed67), f32::from_bits(0x3cc8_f340), -f32::from_bits(0x3f47_af64));
+        let small_mirror =
+            Vec3::new(-f32::from_bits(0x3f09_f213), f32::from_bits(0x3cc8_f340), -f32::from_bits(0x3f47_af64));
+        let small_glass =
+            Vec3::new(f32::from_bits(0x3f0e_ed67), f32::from_bits(0x3cc8_f340), -f32::from_bits(0x3f47_af64));
         let large = Vec3::new(f32::from_bits(0x3c1f_6a80), f32::from_bits(0x3cc8_f340), -f32::from_bits(0x3ef5_c52e));
         let s0 = spheres(&build(450, 8, 8).unwrap());
         assert_eq!(s0.len(), 2);

@@ -35,7 +35,13 @@ pub struct Film {
 impl Film {
     /// An empty film.
     pub fn new(width: u32, height: u32) -> Self {
-        Self { width, height, sum: vec![[0.0; 3]; width as usize * height as usize], iterations: 0, rejected_samples: 0 }
+        Self {
+            width,
+            height,
+            sum: vec![[0.0; 3]; width as usize * height as usize],
+            iterations: 0,
+            rejected_samples: 0,
+        }
     }
 
     /// Width in pixels.

@@ -221,7 +221,12 @@ impl Light {
 
     /// Samples the start of a light sub-path: `u_position` for the point, `u_direction` for
     /// the direction.
-    pub fn sample_emission(&self, u_position: [f32; 2], u_direction: [f32; 2], sphere: &BoundingSphere) -> EmissionSample {
+    pub fn sample_emission(
+        &self,
+        u_position: [f32; 2],
+        u_direction: [f32; 2],
+        sphere: &BoundingSphere,
+    ) -> EmissionSample {
         match self {
             Light::Area(light) => {
                 let b = warp::uniform_triangle(u_position);

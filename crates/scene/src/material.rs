@@ -179,9 +179,8 @@ impl Bsdf {
         // Russian roulette keeps the path with the largest per-channel albedo, so a path's
         // weight never grows through the roulette (refraction has weight 1 − F).
         let refract_weight = if material.ior > 0.0 { 1.0 - fresnel } else { 0.0 };
-        let continuation = ((material.diffuse + material.phong + material.mirror * fresnel).max_component()
-            + refract_weight)
-            .min(1.0);
+        let continuation =
+            ((material.diffuse + material.phong + material.mirror * fresnel).max_component() + refract_weight).min(1.0);
         Some(Bsdf { material: *material, frame, local_fixed, mode, probabilities, fresnel, continuation })
     }
 

@@ -59,7 +59,13 @@ pub struct Scene {
 
 impl Scene {
     /// Builds the BVH and the bounding sphere. Light indices of primitives must be valid.
-    pub fn new(name: impl Into<String>, primitives: Vec<Primitive>, materials: Vec<Material>, lights: Vec<Light>, camera: Camera) -> Self {
+    pub fn new(
+        name: impl Into<String>,
+        primitives: Vec<Primitive>,
+        materials: Vec<Material>,
+        lights: Vec<Light>,
+        camera: Camera,
+    ) -> Self {
         let bounds: Vec<Aabb> = primitives.iter().map(|p| p.shape.bounds()).collect();
         let scene_box = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
         let (center, radius) = if scene_box.is_empty() { (Vec3::ZERO, 1.0) } else { scene_box.bounding_sphere() };
@@ -80,8 +86,9 @@ impl Scene {
     /// Nearest intersection of `ray` (any distance > 0).
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
-        let (index, distance) =
-            self.bvh.closest_hit(ray, f32::INFINITY, |i, r, t_max| self.primitives[i as usize].shape.intersect(r, t_max))?;
+        let (index, distance) = self
+            .bvh
+            .closest_hit(ray, f32::INFINITY, |i, r, t_max| self.primitives[i as usize].shape.intersect(r, t_max))?;
         let primitive = &self.primitives[index as usize];
         let position = ray.at(distance);
         Some(SurfaceHit {

@@ -100,10 +100,12 @@ fn swapping_fixed_and_generated_swaps_the_pdfs_and_the_value_is_reciprocal() {
             let b = if material.phong.is_black() {
                 direction_at(n, 85.0 * rng.uniform(), 6.3 * rng.uniform())
             } else {
-                (reflect(a, n) + 0.2 * Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5)).normalize()
+                (reflect(a, n) + 0.2 * Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5))
+                    .normalize()
             };
             for mode in MODES {
-                let (Some(from_a), Some(from_b)) = (Bsdf::new(&material, n, a, mode), Bsdf::new(&material, n, b, mode)) else {
+                let (Some(from_a), Some(from_b)) = (Bsdf::new(&material, n, a, mode), Bsdf::new(&material, n, b, mode))
+                else {
                     continue;
                 };
                 match (from_a.evaluate(b), from_b.evaluate(a)) {
@@ -133,7 +135,9 @@ fn albedo_never_exceeds_the_reflectance() {
             let mut rng = Rng::for_stream(11, theta as u64, 0);
             let mut stats = testkit::MeanVar::new();
             for _ in 0..100_000 {
-                let w = bsdf.sample(rng.uniform3()).map_or(0.0, |s| (s.value * (s.cos_generated / s.pdf.forward.0)).max_component());
+                let w = bsdf
+                    .sample(rng.uniform3())
+                    .map_or(0.0, |s| (s.value * (s.cos_generated / s.pdf.forward.0)).max_component());
                 stats.push(w as f64);
             }
             assert!(
@@ -150,7 +154,8 @@ fn albedo_never_exceeds_the_reflectance() {
 #[test]
 fn one_sided_lobes_are_zero_from_and_towards_the_back() {
     let n = Vec3::Z;
-    let material = Material { diffuse: Rgb::splat(0.5), phong: Rgb::splat(0.3), phong_exponent: 5.0, ..Material::BLACK };
+    let material =
+        Material { diffuse: Rgb::splat(0.5), phong: Rgb::splat(0.3), phong_exponent: 5.0, ..Material::BLACK };
     let front = Vec3::new(0.3, 0.1, 0.9).normalize();
     let back = Vec3::new(0.2, -0.3, -0.8).normalize();
     let bsdf = Bsdf::new(&material, n, front, TransportMode::Radiance).unwrap();
@@ -212,14 +217,20 @@ fn glass_chooses_reflection_with_the_fresnel_probability_and_refracts_by_snell()
                         assert!(cos_generated * cos_fixed < 0.0, "refraction crosses the surface");
                         let (eta_fixed, eta_generated) = if cos_fixed > 0.0 { (1.0, 1.6) } else { (1.6, 1.0) };
                         let sin = |c: f32| (1.0 - c * c).max(0.0).sqrt();
-                        assert!((eta_fixed * sin(cos_fixed) - eta_generated * sin(cos_generated)).abs() < 1e-4, "Snell");
+                        assert!(
+                            (eta_fixed * sin(cos_fixed) - eta_generated * sin(cos_generated)).abs() < 1e-4,
+                            "Snell"
+                        );
                         // In the plane of incidence: generated, fixed and normal are coplanar.
                         assert!(n.cross(fixed).dot(s.direction).abs() < 1e-4);
                         let expected = match mode {
                             TransportMode::Radiance => sqr(eta_fixed / eta_generated),
                             TransportMode::Importance => 1.0,
                         };
-                        assert!((weight - expected).abs() < 1e-4 * expected, "refraction weight {weight} vs {expected}");
+                        assert!(
+                            (weight - expected).abs() < 1e-4 * expected,
+                            "refraction weight {weight} vs {expected}"
+                        );
                     }
                     other => panic!("glass sampled {other:?}"),
                 }

@@ -210,7 +210,7 @@ fn the_three_queries_report_the_same_pdfs_for_the_same_ray() {
     // Delta lights cannot be hit; flags.
     let p = Light::Point(PointLight { position: Vec3::ZERO, intensity: Rgb::WHITE });
     assert!(p.radiance_on_hit(Vec3::Z, &s).is_none() && p.is_delta() && p.is_finite());
-    assert!(b.is_delta() == false && !b.is_finite());
+    assert!(!b.is_delta() && !b.is_finite());
     assert!(l.is_finite() && !l.is_delta());
 }
 
