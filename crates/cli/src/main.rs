@@ -50,15 +50,9 @@ enum AlgorithmName {
 }
 
 impl AlgorithmName {
-    fn algorithm(self) -> Result<Algorithm> {
+    fn algorithm(self) -> Algorithm {
         let name = self.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default();
-        Algorithm::from_name(&name).with_context(|| {
-            let available: Vec<&str> = Algorithm::ALL.iter().map(|(_, n)| *n).collect();
-            format!(
-                "algorithm '{name}' is not implemented yet (the VCM engine is issue #3); available now: {}",
-                available.join(", ")
-            )
-        })
+        Algorithm::from_name(&name).expect("every command-line algorithm name is implemented")
     }
 }
 
@@ -71,7 +65,7 @@ struct RenderArgs {
     #[arg(long, value_name = "N")]
     scene_mask: Option<u32>,
     /// Rendering algorithm.
-    #[arg(long, short, value_enum, default_value_t = AlgorithmName::Pt)]
+    #[arg(long, short, value_enum, default_value_t = AlgorithmName::Vcm)]
     algorithm: AlgorithmName,
     /// Number of iterations, one sample per pixel each [default: 64].
     #[arg(long, short, value_name = "N", conflicts_with = "time")]
@@ -88,6 +82,12 @@ struct RenderArgs {
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Initial merging radius as a fraction of the scene's bounding-sphere radius.
+    #[arg(long, value_name = "F", default_value_t = 0.003)]
+    radius_factor: f32,
+    /// Merging radius reduction: r_i = r_0 * (i+1)^((alpha-1)/2), 0 < alpha <= 1.
+    #[arg(long, value_name = "ALPHA", default_value_t = 0.75)]
+    radius_alpha: f32,
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N", default_value_t = 0)]
     threads: usize,
@@ -178,7 +178,13 @@ fn check_writable(path: &Path) -> Result<()> {
 }
 
 fn run_render(args: RenderArgs) -> Result<()> {
-    let algorithm = args.algorithm.algorithm()?;
+    let algorithm = args.algorithm.algorithm();
+    if !(args.radius_factor.is_finite() && args.radius_factor > 0.0) {
+        bail!("--radius-factor must be a positive number, got {}", args.radius_factor);
+    }
+    if !(args.radius_alpha > 0.0 && args.radius_alpha <= 1.0) {
+        bail!("--radius-alpha must be in (0, 1], got {}", args.radius_alpha);
+    }
     let mask = match args.scene_mask {
         Some(mask) => mask,
         None => scene_mask(&args.scene)?,
@@ -205,6 +211,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
         seed: args.seed,
         threads: args.threads,
         progress: !args.quiet,
+        radius_factor: args.radius_factor,
+        radius_alpha: args.radius_alpha,
     };
     let result = render::render(&scene, &settings).map_err(anyhow::Error::msg)?;
     let film = &result.film;
@@ -216,8 +224,12 @@ fn run_render(args: RenderArgs) -> Result<()> {
     let seconds = result.elapsed.as_secs_f64();
     let iterations = film.iterations();
     let names: Vec<String> = outputs.iter().map(|(p, _)| p.display().to_string()).collect();
+    let vertices = match result.light_vertices {
+        Some((count, bytes)) => format!(", {count} light vertices x {bytes} B"),
+        None => String::new(),
+    };
     eprintln!(
-        "{} with {} at {}x{}: {} iterations in {:.2} s ({:.1} ms/iteration, {} threads), {} rejected samples -> {}",
+        "{} with {} at {}x{}: {} iterations in {:.2} s ({:.1} ms/iteration, {} threads{vertices}), {} rejected samples -> {}",
         scene.name,
         algorithm.name(),
         film.width(),
@@ -243,7 +255,7 @@ fn run_scenes() {
 }
 
 fn run_bench(args: BenchArgs) -> Result<()> {
-    let algorithm = args.algorithm.algorithm()?;
+    let algorithm = args.algorithm.algorithm();
     println!("{:<22} {:>10} {:>14} {:>8}", "scene", "algorithm", "ms/iteration", "threads");
     for builtin in BUILTIN_SCENES {
         let scene = build_scene(builtin.mask, args.resolution)?;

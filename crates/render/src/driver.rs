@@ -14,7 +14,9 @@ use rayon::prelude::*;
 use scene::{Film, FrameBuffer, Scene};
 use spectrum::Rgb;
 
-use crate::{eye_light, path_tracer};
+use crate::eye_light;
+use crate::path_tracer::PathTracer;
+use crate::vcm::{VcmAlgorithm, VcmEngine, VcmSettings};
 
 /// The rendering algorithms. The names are the command-line spellings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,11 +25,21 @@ pub enum Algorithm {
     PathTracing,
     /// Eye light: `|cos|` shading preview.
     EyeLight,
+    /// An algorithm of the VCM engine.
+    Vcm(VcmAlgorithm),
 }
 
 impl Algorithm {
     /// Every algorithm with its command-line name.
-    pub const ALL: [(Algorithm, &'static str); 2] = [(Algorithm::PathTracing, "pt"), (Algorithm::EyeLight, "el")];
+    pub const ALL: [(Algorithm, &'static str); 7] = [
+        (Algorithm::PathTracing, "pt"),
+        (Algorithm::EyeLight, "el"),
+        (Algorithm::Vcm(VcmAlgorithm::LightTracing), "lt"),
+        (Algorithm::Vcm(VcmAlgorithm::ProgressivePhotonMapping), "ppm"),
+        (Algorithm::Vcm(VcmAlgorithm::BidirectionalPhotonMapping), "bpm"),
+        (Algorithm::Vcm(VcmAlgorithm::BidirectionalPathTracing), "bpt"),
+        (Algorithm::Vcm(VcmAlgorithm::VertexConnectionMerging), "vcm"),
+    ];
 
     /// The command-line name.
     pub fn name(self) -> &'static str {
@@ -64,6 +76,10 @@ pub struct RenderSettings {
     pub threads: usize,
     /// Draw a progress bar on stderr (only when it is a terminal).
     pub progress: bool,
+    /// Initial merging radius as a fraction of the scene's bounding-sphere radius.
+    pub radius_factor: f32,
+    /// Merging radius reduction α.
+    pub radius_alpha: f32,
 }
 
 impl Default for RenderSettings {
@@ -75,6 +91,8 @@ impl Default for RenderSettings {
             seed: 0,
             threads: 0,
             progress: false,
+            radius_factor: 0.003,
+            radius_alpha: 0.75,
         }
     }
 }
@@ -88,36 +106,125 @@ pub struct RenderOutput {
     pub elapsed: Duration,
     /// Threads actually used.
     pub threads: usize,
+    /// Light vertices stored in the last iteration and bytes per vertex (VCM engine only).
+    pub light_vertices: Option<(usize, usize)>,
+}
+
+/// The integrator of a render, with its state across iterations.
+enum Integrator {
+    PathTracing(PathTracer),
+    EyeLight,
+    Vcm(Box<VcmEngine>),
+}
+
+/// Renders iterations one at a time: the building block of [`render`], also used by tests
+/// that need every iteration's frame.
+pub struct Renderer<'a> {
+    scene: &'a Scene,
+    settings: RenderSettings,
+    pool: rayon::ThreadPool,
+    integrator: Integrator,
+    frame: FrameBuffer,
+    iteration: u64,
+}
+
+impl<'a> Renderer<'a> {
+    /// Prepares a render of `scene` (the budget in `settings` is not used here).
+    pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Result<Self, String> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(settings.threads)
+            .build()
+            .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
+        let integrator = match settings.algorithm {
+            Algorithm::PathTracing => Integrator::PathTracing(PathTracer::new(settings.max_length)),
+            Algorithm::EyeLight => Integrator::EyeLight,
+            Algorithm::Vcm(algorithm) => Integrator::Vcm(Box::new(VcmEngine::new(
+                scene,
+                VcmSettings {
+                    algorithm,
+                    max_length: settings.max_length,
+                    radius_factor: settings.radius_factor,
+                    radius_alpha: settings.radius_alpha,
+                },
+            ))),
+        };
+        let frame = FrameBuffer::new(scene.camera.width, scene.camera.height);
+        Ok(Self { scene, settings: settings.clone(), pool, integrator, frame, iteration: 0 })
+    }
+
+    /// Renders the next iteration into [`Renderer::frame`]; returns the number of rejected
+    /// (non-finite) samples.
+    pub fn step(&mut self) -> u64 {
+        let (scene, seed, iteration) = (self.scene, self.settings.seed, self.iteration);
+        let frame = &mut self.frame;
+        let integrator = &mut self.integrator;
+        let rejected = self.pool.install(|| match integrator {
+            Integrator::Vcm(engine) => engine.run_iteration(scene, seed, iteration, frame),
+            Integrator::PathTracing(tracer) => {
+                render_iteration(scene, seed, iteration, frame, |ray, rng| tracer.radiance(scene, ray, rng))
+            }
+            Integrator::EyeLight => {
+                render_iteration(scene, seed, iteration, frame, |ray, _| eye_light::eye_light(scene, &ray))
+            }
+        });
+        self.iteration += 1;
+        rejected
+    }
+
+    /// The frame of the last iteration.
+    pub fn frame(&self) -> &FrameBuffer {
+        &self.frame
+    }
+
+    /// Iterations rendered so far.
+    pub fn iterations(&self) -> u64 {
+        self.iteration
+    }
+
+    /// Worker threads.
+    pub fn threads(&self) -> usize {
+        self.pool.current_num_threads()
+    }
+
+    /// The VCM engine, when the algorithm is one of its.
+    pub fn vcm_engine(&self) -> Option<&VcmEngine> {
+        match &self.integrator {
+            Integrator::Vcm(engine) => Some(engine),
+            _ => None,
+        }
+    }
+
+    /// The VCM engine, mutably (e.g. to record per-technique images).
+    pub fn vcm_engine_mut(&mut self) -> Option<&mut VcmEngine> {
+        match &mut self.integrator {
+            Integrator::Vcm(engine) => Some(engine),
+            _ => None,
+        }
+    }
 }
 
 /// Renders `scene` progressively as `settings` say.
 pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderOutput, String> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(settings.threads)
-        .build()
-        .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
-    let threads = pool.current_num_threads();
+    let mut renderer = Renderer::new(scene, settings)?;
     let camera = &scene.camera;
     let mut film = Film::new(camera.width, camera.height);
-    let mut frame = FrameBuffer::new(camera.width, camera.height);
     let progress = make_progress_bar(settings);
     let start = Instant::now();
-    let mut iteration = 0u64;
     loop {
+        let iteration = renderer.iterations();
         match settings.budget {
             Budget::Iterations(n) if iteration >= n => break,
             Budget::Time(limit) if iteration > 0 && start.elapsed() >= limit => break,
             _ => {}
         }
-        let rejected = pool.install(|| render_iteration(scene, settings, iteration, &mut frame));
-        film.add_iteration(&frame, rejected);
-        iteration += 1;
+        let rejected = renderer.step();
+        film.add_iteration(renderer.frame(), rejected);
         if let Some(bar) = &progress {
             match settings.budget {
-                Budget::Iterations(_) => bar.set_position(iteration),
+                Budget::Iterations(_) => bar.set_position(iteration + 1),
                 Budget::Time(_) => {
                     bar.set_position(start.elapsed().as_millis() as u64);
-                    bar.set_message(format!("{iteration} it"));
+                    bar.set_message(format!("{} it", iteration + 1));
                 }
             }
         }
@@ -125,7 +232,8 @@ pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderOutput, 
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
-    Ok(RenderOutput { film, elapsed: start.elapsed(), threads })
+    let light_vertices = renderer.vcm_engine().map(|e| (e.stats().light_vertices, e.stats().bytes_per_vertex));
+    Ok(RenderOutput { film, elapsed: start.elapsed(), threads: renderer.threads(), light_vertices })
 }
 
 fn make_progress_bar(settings: &RenderSettings) -> Option<ProgressBar> {
@@ -141,9 +249,15 @@ fn make_progress_bar(settings: &RenderSettings) -> Option<ProgressBar> {
     Some(bar)
 }
 
-/// Renders one iteration into `frame` (overwriting it); returns the number of rejected
-/// (non-finite) samples.
-fn render_iteration(scene: &Scene, settings: &RenderSettings, iteration: u64, frame: &mut FrameBuffer) -> u64 {
+/// Renders one iteration of a per-pixel integrator into `frame` (overwriting it); returns the
+/// number of rejected (non-finite) samples.
+fn render_iteration(
+    scene: &Scene,
+    seed: u64,
+    iteration: u64,
+    frame: &mut FrameBuffer,
+    radiance: impl Fn(math::Ray, &mut Rng) -> Rgb + Sync,
+) -> u64 {
     let width = frame.width as usize;
     frame
         .pixels
@@ -153,15 +267,9 @@ fn render_iteration(scene: &Scene, settings: &RenderSettings, iteration: u64, fr
             let mut rejected = 0u64;
             for (x, pixel) in row.iter_mut().enumerate() {
                 let index = (y * width + x) as u64;
-                let mut rng = Rng::for_stream(settings.seed, iteration, index);
+                let mut rng = Rng::for_stream(seed, iteration, index);
                 let raster = Vec2::new(x as f32 + rng.uniform(), y as f32 + rng.uniform());
-                let ray = scene.camera.generate_ray(raster);
-                let value = match settings.algorithm {
-                    Algorithm::PathTracing => {
-                        path_tracer::PathTracer::new(settings.max_length).radiance(scene, ray, &mut rng)
-                    }
-                    Algorithm::EyeLight => eye_light::eye_light(scene, &ray),
-                };
+                let value = radiance(scene.camera.generate_ray(raster), &mut rng);
                 *pixel = if value.is_finite() {
                     value
                 } else {

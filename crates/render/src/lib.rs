@@ -3,11 +3,15 @@
 //! * [`path_tracer`]: the reference path tracer (BSDF sampling + next-event estimation,
 //!   combined by MIS), deliberately independent of the VCM engine.
 //! * [`eye_light`]: a fast `|cos|` shading preview.
+//! * [`vcm`]: the VCM engine (light tracing, PPM, BPM, BPT, VCM).
+//! * [`hash_grid`]: the range search for vertex merging.
 //! * [`driver`]: iterations or a time budget, threads, determinism, progress.
 
 pub mod driver;
 pub mod eye_light;
+pub mod hash_grid;
 pub mod path_tracer;
+pub mod vcm;
 
 pub use driver::{Algorithm, RenderOutput, RenderSettings, render};
 

@@ -267,19 +267,45 @@ impl Bsdf {
             });
         }
         if pick < p.diffuse + p.phong + p.reflect {
-            let local = self.reflected_fixed();
-            let cos = local.z.abs();
-            let value = self.material.mirror * (self.fresnel / cos);
-            let pdf = PdfPair { forward: PdfW(p.reflect), reverse: PdfW(p.reflect) };
-            return Some(BsdfSample {
-                direction: self.frame.to_world(local),
-                value,
-                cos_generated: cos,
-                pdf,
-                lobe: LobeKind::SpecularReflection,
-            });
+            return Some(self.sample_reflection(p.reflect));
         }
-        self.sample_refraction()
+        self.sample_refraction(p.refract)
+    }
+
+    /// Samples only the specular (delta) lobes, chosen in proportion to their albedos among
+    /// themselves (`u[2]` picks the lobe). The pdfs are the probabilities of that restricted
+    /// choice. Used where the non-specular part is estimated otherwise, e.g. photon mapping
+    /// merges at a mixed vertex and continues through its specular part only. `None` when the
+    /// material has no specular lobe.
+    pub fn sample_specular(&self, u: [f32; 3]) -> Option<BsdfSample> {
+        let p = self.probabilities;
+        let specular = p.reflect + p.refract;
+        if specular <= 0.0 {
+            return None;
+        }
+        if u[2] * specular < p.reflect {
+            Some(self.sample_reflection(p.reflect / specular))
+        } else {
+            self.sample_refraction(p.refract / specular)
+        }
+    }
+
+    /// True when the material has a specular (delta) lobe.
+    pub fn has_specular(&self) -> bool {
+        self.probabilities.reflect + self.probabilities.refract > 0.0
+    }
+
+    /// The mirror lobe, chosen with probability `probability`.
+    fn sample_reflection(&self, probability: f32) -> BsdfSample {
+        let local = self.reflected_fixed();
+        let cos = local.z.abs();
+        BsdfSample {
+            direction: self.frame.to_world(local),
+            value: self.material.mirror * (self.fresnel / cos),
+            cos_generated: cos,
+            pdf: PdfPair { forward: PdfW(probability), reverse: PdfW(probability) },
+            lobe: LobeKind::SpecularReflection,
+        }
     }
 
     /// The fixed direction mirrored about the normal, in local coordinates.
@@ -314,10 +340,10 @@ impl Bsdf {
         }
     }
 
-    /// Samples the refraction lobe (chosen with probability `1 − F` of the dielectric lobes).
-    fn sample_refraction(&self) -> Option<BsdfSample> {
-        let p = self.probabilities;
-        if p.refract <= 0.0 {
+    /// The refraction lobe, chosen with probability `probability`; `None` under total internal
+    /// reflection or without a dielectric.
+    fn sample_refraction(&self, probability: f32) -> Option<BsdfSample> {
+        if probability <= 0.0 {
             return None;
         }
         let fixed = self.local_fixed;
@@ -340,7 +366,7 @@ impl Bsdf {
             direction: self.frame.to_world(local),
             value: Rgb::splat(scale / cos_t),
             cos_generated: cos_t,
-            pdf: PdfPair { forward: PdfW(p.refract), reverse: PdfW(p.refract) },
+            pdf: PdfPair { forward: PdfW(probability), reverse: PdfW(probability) },
             lobe: LobeKind::SpecularTransmission,
         })
     }

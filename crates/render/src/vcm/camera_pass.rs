@@ -1,0 +1,135 @@
+//! The camera pass: one camera sub-path per pixel; at every vertex the emitter hit (s = 0),
+//! next-event estimation (s = 1), connections to the pixel's light sub-path (s, t > 1) and
+//! merges with all light vertices in range (s, t ≥ 2), then BSDF sampling with Russian
+//! roulette.
+
+use math::{Rng, Vec2};
+use scene::{Bsdf, Scene, TransportMode};
+use spectrum::Rgb;
+
+use super::connect::{connect_vertices, next_event};
+use super::light_vertex::LightVertex;
+use super::merge::{MergeWeighting, merge};
+use super::mis::{self, SubPathMis};
+use super::subpath::SubPath;
+use super::{Family, FamilyValues, Iteration, Techniques};
+use crate::hash_grid::HashGrid;
+
+/// Light vertices a camera path may merge with.
+pub struct MergeSource<'a> {
+    /// The vertices the grid was built over.
+    pub vertices: &'a [LightVertex],
+    /// The range-search structure.
+    pub grid: &'a HashGrid,
+}
+
+/// Traces the camera sub-path through raster pixel `(x, y)` and returns its contributions by
+/// technique family.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_camera_path(
+    scene: &Scene,
+    it: &Iteration,
+    techniques: &Techniques,
+    x: u32,
+    y: u32,
+    rng: &mut Rng,
+    light_path: &[LightVertex],
+    merge_source: Option<&MergeSource>,
+) -> FamilyValues {
+    let k = &it.constants;
+    let mut out = FamilyValues::default();
+    let camera = &scene.camera;
+    let raster = Vec2::new(x as f32 + rng.uniform(), y as f32 + rng.uniform());
+    let ray = camera.generate_ray(raster);
+    let camera_pdf_w = camera.solid_angle_pdf(camera.forward.dot(ray.direction)).0;
+    let mut path = SubPath {
+        ray,
+        throughput: Rgb::WHITE,
+        path_length: 1,
+        mis: SubPathMis::camera_start(camera_pdf_w, k),
+        is_finite_light: true,
+        specular_path: true,
+        origin_offset: 0.0,
+    };
+    let pick = scene.light_pick_probability();
+
+    loop {
+        let Some(hit) = scene.intersect(&path.ray) else {
+            // Escaped: the environment light (infinite: no distance update, §5.1).
+            if let Some(light) = scene.background_light()
+                && let Some(emitted) = light.radiance_on_hit(path.ray.direction, &scene.bounding_sphere)
+                && let Some(weight) =
+                    emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
+            {
+                out.add(Family::EmitterHit, path.throughput * emitted.radiance * weight);
+            }
+            break;
+        };
+        let direction = path.ray.direction;
+        let cos_fixed = hit.normal.dot(-direction).abs();
+        let distance_squared = path.arrival_distance_squared(hit.distance);
+        path.mis.arrive(distance_squared, cos_fixed);
+
+        // Emitter hit (s = 0).
+        if let Some(light_index) = hit.light
+            && let Some(emitted) = scene.lights[light_index as usize].radiance_on_hit(direction, &scene.bounding_sphere)
+            && let Some(weight) =
+                emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
+        {
+            out.add(Family::EmitterHit, path.throughput * emitted.radiance * weight);
+        }
+        let Some(bsdf) = Bsdf::new(scene.material(&hit), hit.normal, -direction, TransportMode::Radiance) else {
+            break;
+        };
+        if path.path_length >= it.max_length {
+            break;
+        }
+
+        let mut specular_only = false;
+        if !bsdf.is_delta() {
+            if techniques.connect {
+                // Next-event estimation (s = 1).
+                out.add(Family::NextEvent, next_event(scene, &path, &bsdf, hit.position, rng, k));
+                // Connections to the pixel's light sub-path (s, t > 1), stored in path order.
+                for light in light_path {
+                    if light.path_length + 1 + path.path_length > it.max_length {
+                        break;
+                    }
+                    out.add(Family::Connection, connect_vertices(scene, &path, &bsdf, hit.position, light, k));
+                }
+            }
+            if let Some(source) = merge_source {
+                let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
+                let merged =
+                    merge(&path, &bsdf, hit.position, source.vertices, source.grid, it.max_length, weighting, k);
+                out.add(Family::Merging, merged);
+                // Photon mapping stops at the first non-specular vertex; through a mixed
+                // vertex it continues along the specular lobes only.
+                if techniques.ppm {
+                    if !bsdf.has_specular() {
+                        break;
+                    }
+                    specular_only = true;
+                }
+            }
+        }
+        if path.scatter(&bsdf, hit.position, rng, specular_only, k).is_none() {
+            break;
+        }
+    }
+    out
+}
+
+/// MIS weight of an emitter hit, or `None` when the enabled techniques do not count it.
+fn emitter_weight(path: &SubPath, techniques: &Techniques, direct_pdf_a: f32, emission_pdf_w: f32) -> Option<f32> {
+    if path.path_length == 1 {
+        // Seen directly: no other technique samples it.
+        return Some(1.0);
+    }
+    if !techniques.connect {
+        // Merging only (PPM, BPM): purely specular camera paths are the only way to these
+        // paths; the rest is found by merging.
+        return path.specular_path.then_some(1.0);
+    }
+    Some(mis::emitter_hit_weight(&path.mis, direct_pdf_a, emission_pdf_w))
+}

@@ -1,0 +1,122 @@
+//! Vertex connection techniques: a light vertex to the camera (t = 1), a camera vertex to a
+//! light (s = 1, next-event estimation), a camera vertex to a light vertex (s, t > 1), and the
+//! weight of an emitter hit by a camera path (s = 0).
+
+use math::{Rng, Vec3};
+use scene::{Bsdf, Scene};
+use spectrum::Rgb;
+
+use super::light_vertex::LightVertex;
+use super::mis::{self, ConnectionPdfs, MisConstants, NeePdfs};
+use super::subpath::SubPath;
+
+/// A light-tracing contribution to be added to one pixel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Splat {
+    /// Row-major pixel index.
+    pub pixel: u32,
+    /// Contribution (already divided by the number of light sub-paths).
+    pub value: Rgb,
+}
+
+/// Connects light sub-path vertex `position` (with `bsdf`) to the camera (t = 1). Returns the
+/// splat, or `None` if the vertex is outside the image, faces away or is occluded.
+/// `weighted = false` gives plain light tracing (weight 1).
+pub fn connect_to_camera(
+    scene: &Scene,
+    light: &SubPath,
+    bsdf: &Bsdf,
+    position: Vec3,
+    weighted: bool,
+    k: &MisConstants,
+) -> Option<Splat> {
+    let camera = &scene.camera;
+    let raster = camera.raster_position(position)?;
+    let to_camera = camera.position - position;
+    let distance = to_camera.length();
+    let direction = to_camera / distance;
+    let eval = bsdf.evaluate(direction)?;
+    let cos_at_camera = camera.forward.dot(-direction);
+    // Density of the camera sampling this point: image-plane density 1 per pixel, to solid
+    // angle (d²/cos³), to area at the vertex (cos/distance²).
+    let camera_pdf_a = camera.solid_angle_pdf(cos_at_camera).to_area(distance * distance, eval.cos_generated).0;
+    let weight = if weighted {
+        let reverse = eval.pdf.reverse.0 * bsdf.continuation_probability();
+        mis::camera_connection_weight(&light.mis, camera_pdf_a, reverse, k)
+    } else {
+        1.0
+    };
+    // The pixel integral is over the image plane: the estimate is f·T·(camera pdf)/N_L.
+    let value = light.throughput * eval.value * (weight * camera_pdf_a / k.light_path_count);
+    if value.is_black() || scene.occluded(position, direction, distance) {
+        return None;
+    }
+    let x = (raster.x as u32).min(camera.width - 1);
+    let y = (raster.y as u32).min(camera.height - 1);
+    Some(Splat { pixel: y * camera.width + x, value })
+}
+
+/// Next-event estimation from camera vertex `position` (s = 1), MIS-weighted (eqs. 44, 45).
+pub fn next_event(
+    scene: &Scene,
+    camera: &SubPath,
+    bsdf: &Bsdf,
+    position: Vec3,
+    rng: &mut Rng,
+    k: &MisConstants,
+) -> Rgb {
+    let pick_u = rng.uniform();
+    let u = rng.uniform2();
+    let Some((_, light, pick)) = scene.pick_light(pick_u) else { return Rgb::BLACK };
+    let Some(direct) = light.sample_direct(position, u, &scene.bounding_sphere) else { return Rgb::BLACK };
+    let Some(eval) = bsdf.evaluate(direct.direction) else { return Rgb::BLACK };
+    let continuation = bsdf.continuation_probability();
+    let pdfs = NeePdfs {
+        direct_w: direct.direct_pdf.0 * pick,
+        emission_w: direct.emission_pdf.0 * pick,
+        bsdf_forward_w: if light.is_delta() { 0.0 } else { eval.pdf.forward.0 * continuation },
+        bsdf_reverse_w: eval.pdf.reverse.0 * continuation,
+        cos_at_vertex: eval.cos_generated,
+        cos_at_light: direct.cos_at_light,
+    };
+    let weight = mis::nee_weight(&camera.mis, &pdfs, k);
+    let value = direct.radiance * eval.value * (weight * eval.cos_generated / pdfs.direct_w);
+    if value.is_black() || scene.occluded(position, direct.direction, direct.distance) {
+        return Rgb::BLACK;
+    }
+    camera.throughput * value
+}
+
+/// Connects camera vertex `position` (with `bsdf`) to a light vertex (s, t > 1), MIS-weighted
+/// (eqs. 40, 41).
+pub fn connect_vertices(
+    scene: &Scene,
+    camera: &SubPath,
+    bsdf: &Bsdf,
+    position: Vec3,
+    light: &LightVertex,
+    k: &MisConstants,
+) -> Rgb {
+    let to_light = light.position - position;
+    let distance_squared = to_light.length_squared();
+    let distance = distance_squared.sqrt();
+    let direction = to_light / distance;
+    let Some(camera_eval) = bsdf.evaluate(direction) else { return Rgb::BLACK };
+    let Some(light_bsdf) = light.bsdf(scene) else { return Rgb::BLACK };
+    let Some(light_eval) = light_bsdf.evaluate(-direction) else { return Rgb::BLACK };
+    let camera_continuation = bsdf.continuation_probability();
+    let inv_d2 = 1.0 / distance_squared;
+    let pdfs = ConnectionPdfs {
+        camera_forward_a: camera_eval.pdf.forward.0 * camera_continuation * light_eval.cos_generated * inv_d2,
+        camera_reverse_w: camera_eval.pdf.reverse.0 * camera_continuation,
+        light_forward_a: light_eval.pdf.forward.0 * light.continuation * camera_eval.cos_generated * inv_d2,
+        light_reverse_w: light_eval.pdf.reverse.0 * light.continuation,
+    };
+    let weight = mis::connection_weight(&light.mis, &camera.mis, &pdfs, k);
+    let geometry = camera_eval.cos_generated * light_eval.cos_generated * inv_d2;
+    let value = camera_eval.value * light_eval.value * (weight * geometry);
+    if value.is_black() || scene.occluded(position, direction, distance) {
+        return Rgb::BLACK;
+    }
+    camera.throughput * light.throughput * value
+}

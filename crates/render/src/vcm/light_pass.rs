@@ -1,0 +1,79 @@
+//! The light pass: traces light sub-paths, stores their non-specular vertices and connects
+//! each to the camera (t = 1).
+
+use math::{RAY_EPSILON, Ray, Rng};
+use scene::{Bsdf, Scene, TransportMode};
+
+use super::connect::{Splat, connect_to_camera};
+use super::light_vertex::LightVertex;
+use super::mis::SubPathMis;
+use super::subpath::SubPath;
+use super::{Iteration, Techniques};
+
+/// Traces one light sub-path: appends its stored vertices to `vertices` and its camera
+/// connections to `splats`.
+pub fn trace_light_path(
+    scene: &Scene,
+    it: &Iteration,
+    techniques: &Techniques,
+    rng: &mut Rng,
+    vertices: &mut Vec<LightVertex>,
+    splats: &mut Vec<Splat>,
+) {
+    let k = &it.constants;
+    let pick_u = rng.uniform();
+    let u_position = rng.uniform2();
+    let u_direction = rng.uniform2();
+    let Some((_, light, pick)) = scene.pick_light(pick_u) else { return };
+    let emission = light.sample_emission(u_position, u_direction, &scene.bounding_sphere);
+    let emission_pdf = emission.emission_pdf.0 * pick;
+    let direct_pdf = emission.direct_pdf.0 * pick;
+    if emission_pdf.is_nan() || emission_pdf <= 0.0 || emission.energy.is_black() {
+        return;
+    }
+    let cos_used = if light.is_finite() { emission.cos_at_light } else { 1.0 };
+    let mut path = SubPath {
+        ray: Ray::new(emission.origin + RAY_EPSILON * emission.direction, emission.direction),
+        throughput: emission.energy / emission_pdf,
+        path_length: 1,
+        mis: SubPathMis::light_start(emission_pdf, direct_pdf, cos_used, light.is_delta(), k),
+        is_finite_light: light.is_finite(),
+        specular_path: true,
+        origin_offset: RAY_EPSILON,
+    };
+
+    while let Some(hit) = scene.intersect(&path.ray) {
+        let fixed = -path.ray.direction;
+        let Some(bsdf) = Bsdf::new(scene.material(&hit), hit.normal, fixed, TransportMode::Importance) else { break };
+        let distance_squared = path.arrival_distance_squared(hit.distance);
+        path.mis.arrive(distance_squared, bsdf.cos_fixed());
+
+        if !bsdf.is_delta() {
+            if techniques.store_light_vertices() {
+                vertices.push(LightVertex {
+                    position: hit.position,
+                    throughput: path.throughput,
+                    mis: path.mis,
+                    path_length: path.path_length,
+                    material: hit.material,
+                    normal: hit.normal,
+                    fixed,
+                    continuation: bsdf.continuation_probability(),
+                });
+            }
+            if techniques.connect_to_camera()
+                && path.path_length < it.max_length
+                && let Some(splat) = connect_to_camera(scene, &path, &bsdf, hit.position, techniques.connect, k)
+            {
+                splats.push(splat);
+            }
+        }
+        // A longer light sub-path could not be connected to any camera vertex.
+        if path.path_length + 2 > it.max_length {
+            break;
+        }
+        if path.scatter(&bsdf, hit.position, rng, false, k).is_none() {
+            break;
+        }
+    }
+}

@@ -1,0 +1,67 @@
+//! Compact storage of light sub-path vertices: a flat `Vec` of vertices plus, per light
+//! sub-path, the index one past its last vertex. A vertex keeps what connections and merges
+//! need — position, throughput, MIS quantities — and the data to rebuild its BSDF (material,
+//! normal, fixed direction), never a full BSDF.
+
+use math::Vec3;
+use scene::{Bsdf, Scene, TransportMode};
+use spectrum::Rgb;
+
+use super::mis::SubPathMis;
+
+/// A stored light sub-path vertex (80 bytes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightVertex {
+    /// Position on the surface.
+    pub position: Vec3,
+    /// Throughput of the light sub-path up to this vertex (emitted energy / pdfs, BSDFs and
+    /// cosines of the earlier vertices).
+    pub throughput: Rgb,
+    /// MIS quantities at this vertex.
+    pub mis: SubPathMis,
+    /// Segments from the light to this vertex.
+    pub path_length: u32,
+    /// Material index, to rebuild the BSDF.
+    pub material: u32,
+    /// Geometric normal.
+    pub normal: Vec3,
+    /// Unit direction towards the previous vertex (the BSDF's fixed direction).
+    pub fixed: Vec3,
+    /// Russian-roulette continuation probability of the vertex's BSDF.
+    pub continuation: f32,
+}
+
+impl LightVertex {
+    /// Rebuilds the vertex's BSDF (importance transport).
+    #[inline]
+    pub fn bsdf(&self, scene: &Scene) -> Option<Bsdf> {
+        Bsdf::new(&scene.materials[self.material as usize], self.normal, self.fixed, TransportMode::Importance)
+    }
+}
+
+/// All light vertices of one iteration, grouped by light sub-path.
+#[derive(Clone, Debug, Default)]
+pub struct LightVertexStore {
+    /// The vertices, light sub-path after light sub-path, each in path order.
+    pub vertices: Vec<LightVertex>,
+    /// For light sub-path `p`, the index one past its last vertex.
+    pub path_ends: Vec<u32>,
+}
+
+impl LightVertexStore {
+    /// The vertices of light sub-path `path`.
+    #[inline]
+    pub fn path(&self, path: usize) -> &[LightVertex] {
+        let start = if path == 0 { 0 } else { self.path_ends[path - 1] as usize };
+        &self.vertices[start..self.path_ends[path] as usize]
+    }
+
+    /// Empties the store, keeping its allocations.
+    pub fn clear(&mut self) {
+        self.vertices.clear();
+        self.path_ends.clear();
+    }
+
+    /// Bytes per stored vertex.
+    pub const BYTES_PER_VERTEX: usize = std::mem::size_of::<LightVertex>();
+}

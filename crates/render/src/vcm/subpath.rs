@@ -1,0 +1,80 @@
+//! The state of a random walk (light or camera sub-path) and its scattering step.
+
+use math::{RAY_EPSILON, Ray, Rng, Vec3};
+use scene::Bsdf;
+use spectrum::Rgb;
+
+use super::mis::{MisConstants, SubPathMis};
+
+/// A sub-path being traced.
+#[derive(Clone, Copy, Debug)]
+pub struct SubPath {
+    /// The next ray to trace (already offset from the last vertex).
+    pub ray: Ray,
+    /// Product of the BSDF values, cosines and inverse pdfs so far (for light sub-paths it
+    /// starts with emitted energy / emission pdf).
+    pub throughput: Rgb,
+    /// Segments traced so far; the vertex about to be found is reached by `path_length`
+    /// segments.
+    pub path_length: u32,
+    /// MIS quantities for the vertex about to be found (partial until [`SubPathMis::arrive`]).
+    pub mis: SubPathMis,
+    /// False for light sub-paths from infinite lights until their first vertex (§5.1).
+    pub is_finite_light: bool,
+    /// True while every scattering event so far was specular.
+    pub specular_path: bool,
+    /// How far `ray.origin` lies past the previous vertex along the ray (0 for camera rays,
+    /// [`RAY_EPSILON`] otherwise), so that MIS uses true vertex distances.
+    pub origin_offset: f32,
+}
+
+/// Why a scattering step stopped the walk or which event it sampled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scattered {
+    /// A non-specular lobe was sampled.
+    NonSpecular,
+    /// A specular lobe was sampled.
+    Specular,
+}
+
+impl SubPath {
+    /// Distance² between the previous vertex and a hit at ray distance `distance`, to pass
+    /// to [`SubPathMis::arrive`]; `None` for the first segment from an infinite light (§5.1).
+    pub fn arrival_distance_squared(&self, distance: f32) -> Option<f32> {
+        if self.path_length > 1 || self.is_finite_light {
+            let d = distance + self.origin_offset;
+            Some(d * d)
+        } else {
+            None
+        }
+    }
+
+    /// Samples the next direction at `position` from `bsdf` (only its specular lobes when
+    /// `specular_only`), applies Russian roulette, updates throughput and MIS quantities
+    /// (eqs. 34–36, 53–55) and prepares the next ray. Returns `None` when the walk ends.
+    pub fn scatter(
+        &mut self,
+        bsdf: &Bsdf,
+        position: Vec3,
+        rng: &mut Rng,
+        specular_only: bool,
+        k: &MisConstants,
+    ) -> Option<Scattered> {
+        let u = rng.uniform3();
+        let sample = if specular_only { bsdf.sample_specular(u)? } else { bsdf.sample(u)? };
+        let continuation = bsdf.continuation_probability();
+        if continuation < 1.0 && rng.uniform() >= continuation {
+            return None;
+        }
+        let specular = sample.lobe.is_specular();
+        let forward = sample.pdf.forward.0 * continuation;
+        let reverse = sample.pdf.reverse.0 * continuation;
+        self.mis.scatter(sample.cos_generated, forward, reverse, specular, k);
+        self.throughput *= sample.value * (sample.cos_generated / forward);
+        self.specular_path &= specular;
+        self.ray = Ray::new(position + RAY_EPSILON * sample.direction, sample.direction);
+        self.origin_offset = RAY_EPSILON;
+        self.path_length += 1;
+        Some(if specular { Scattered::Specular } else { Scattered::NonSpecular })
+    }
+}

@@ -1,0 +1,120 @@
+//! Shared helpers of the render integration tests: per-block estimates with standard errors
+//! from independent iterations, and masks of the pixels an algorithm can render.
+
+#![allow(dead_code)]
+
+use math::Vec2;
+use render::driver::{Budget, Renderer};
+use render::{Algorithm, RenderSettings};
+use scene::{Bsdf, Scene, TransportMode};
+use testkit::MeanVar;
+
+/// Block means over iterations, per block and channel (`(block * 3 + channel)`), with their
+/// standard errors estimated from the spread of the iterations.
+pub struct BlockEstimate {
+    /// Blocks per row.
+    pub blocks_x: usize,
+    /// Mean per block and channel.
+    pub means: Vec<f64>,
+    /// Standard error per block and channel.
+    pub std_errors: Vec<f64>,
+}
+
+/// Renders `iterations` iterations of `algorithm` and returns block statistics.
+pub fn block_estimate(scene: &Scene, settings: &RenderSettings, iterations: u64, block: u32) -> BlockEstimate {
+    let mut renderer = Renderer::new(scene, settings).unwrap();
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let (bx, by) = ((w / block) as usize, (h / block) as usize);
+    let mut stats = vec![MeanVar::new(); bx * by * 3];
+    for _ in 0..iterations {
+        assert_eq!(renderer.step(), 0, "no rejected samples");
+        let frame = renderer.frame();
+        let mut sums = vec![0.0f64; bx * by * 3];
+        for y in 0..(by as u32 * block) {
+            for x in 0..(bx as u32 * block) {
+                let p = frame.pixels[(y * w + x) as usize];
+                let b = (y / block) as usize * bx + (x / block) as usize;
+                for (c, v) in p.to_array().into_iter().enumerate() {
+                    sums[b * 3 + c] += v as f64;
+                }
+            }
+        }
+        let n = (block * block) as f64;
+        for (s, sum) in stats.iter_mut().zip(sums) {
+            s.push(sum / n);
+        }
+    }
+    BlockEstimate {
+        blocks_x: bx,
+        means: stats.iter().map(MeanVar::mean).collect(),
+        std_errors: stats.iter().map(MeanVar::std_error).collect(),
+    }
+}
+
+/// Settings for `algorithm` with `seed`, all cores.
+pub fn settings(algorithm: &str, seed: u64) -> RenderSettings {
+    RenderSettings {
+        algorithm: Algorithm::from_name(algorithm).unwrap(),
+        budget: Budget::Iterations(1),
+        seed,
+        ..RenderSettings::default()
+    }
+}
+
+/// What the primary rays of a block see.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BlockView {
+    /// Some ray hits a purely specular surface.
+    pub specular: bool,
+    /// Some ray hits an emitter or escapes the scene.
+    pub emitter_or_background: bool,
+}
+
+/// Classifies every block by shooting a grid of primary rays through each of its pixels.
+pub fn block_views(scene: &Scene, block: u32) -> Vec<BlockView> {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let (bx, by) = (w / block, h / block);
+    let mut views = vec![BlockView::default(); (bx * by) as usize];
+    for y in 0..by * block {
+        for x in 0..bx * block {
+            let view = &mut views[((y / block) * bx + x / block) as usize];
+            for sy in 0..4 {
+                for sx in 0..4 {
+                    let raster = Vec2::new(x as f32 + (sx as f32 + 0.5) / 4.0, y as f32 + (sy as f32 + 0.5) / 4.0);
+                    let ray = scene.camera.generate_ray(raster);
+                    match scene.intersect(&ray) {
+                        None => view.emitter_or_background = true,
+                        Some(hit) => {
+                            if hit.light.is_some() {
+                                view.emitter_or_background = true;
+                            }
+                            let bsdf =
+                                Bsdf::new(scene.material(&hit), hit.normal, -ray.direction, TransportMode::Radiance);
+                            if bsdf.is_some_and(|b| b.is_delta()) {
+                                view.specular = true;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    views
+}
+
+/// Keeps the entries (3 per block) of the blocks for which `keep` holds.
+pub fn select(
+    estimate: &BlockEstimate,
+    views: &[BlockView],
+    keep: impl Fn(&BlockView) -> bool,
+) -> (Vec<f64>, Vec<f64>) {
+    let mut means = Vec::new();
+    let mut errors = Vec::new();
+    for (b, view) in views.iter().enumerate() {
+        if keep(view) {
+            means.extend_from_slice(&estimate.means[b * 3..b * 3 + 3]);
+            errors.extend_from_slice(&estimate.std_errors[b * 3..b * 3 + 3]);
+        }
+    }
+    (means, errors)
+}
