@@ -9,6 +9,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use render::driver::Budget;
+use render::vcm::RadiusMode;
 use render::{Algorithm, RenderSettings};
 use scene::Scene;
 use scene::cornell::{self, BUILTIN_SCENES};
@@ -56,6 +57,15 @@ impl AlgorithmName {
     }
 }
 
+/// `--radius-mode` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum RadiusModeName {
+    /// `--radius-factor` times the scene's bounding-sphere radius.
+    Global,
+    /// The pixel's footprint at the first surface it sees.
+    PerPixel,
+}
+
 #[derive(Args)]
 struct RenderArgs {
     /// Scene: a built-in id (0-3) or name (see `vcm scenes`).
@@ -88,6 +98,13 @@ struct RenderArgs {
     /// Merging radius reduction: r_i = r_0 * (i+1)^((alpha-1)/2), 0 < alpha <= 1.
     #[arg(long, value_name = "ALPHA", default_value_t = 0.75)]
     radius_alpha: f32,
+    /// Merging radius: one for the image, or per pixel from its footprint (tech report §6.1).
+    #[arg(long, value_enum, default_value_t = RadiusModeName::Global)]
+    radius_mode: RadiusModeName,
+    /// Memory-efficient progressive VCM (tech report §6.2): merge with the previous
+    /// iteration's light vertices, keeping only their 64-byte merging data.
+    #[arg(long)]
+    memory_efficient: bool,
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N", default_value_t = 0)]
     threads: usize,
@@ -105,9 +122,12 @@ struct RenderArgs {
 
 #[derive(Args)]
 struct BenchArgs {
-    /// Algorithm to time.
-    #[arg(long, short, value_enum, default_value_t = AlgorithmName::Pt)]
-    algorithm: AlgorithmName,
+    /// Algorithms to time (default: pt, lt, ppm, bpm, bpt, vcm).
+    #[arg(long, short, value_enum, value_delimiter = ',')]
+    algorithm: Vec<AlgorithmName>,
+    /// Scenes to time (ids or names; default: all four).
+    #[arg(long, short, value_delimiter = ',')]
+    scene: Vec<String>,
     /// Iterations per scene (after one warm-up iteration).
     #[arg(long, short, default_value_t = 8)]
     iterations: u64,
@@ -213,6 +233,11 @@ fn run_render(args: RenderArgs) -> Result<()> {
         progress: !args.quiet,
         radius_factor: args.radius_factor,
         radius_alpha: args.radius_alpha,
+        radius_mode: match args.radius_mode {
+            RadiusModeName::Global => RadiusMode::Global,
+            RadiusModeName::PerPixel => RadiusMode::PerPixel,
+        },
+        memory_efficient: args.memory_efficient,
     };
     let result = render::render(&scene, &settings).map_err(anyhow::Error::msg)?;
     let film = &result.film;
@@ -255,17 +280,42 @@ fn run_scenes() {
 }
 
 fn run_bench(args: BenchArgs) -> Result<()> {
-    let algorithm = args.algorithm.algorithm();
-    println!("{:<22} {:>10} {:>14} {:>8}", "scene", "algorithm", "ms/iteration", "threads");
-    for builtin in BUILTIN_SCENES {
-        let scene = build_scene(builtin.mask, args.resolution)?;
-        let settings =
-            |budget| RenderSettings { algorithm, budget, threads: args.threads, ..RenderSettings::default() };
-        render::render(&scene, &settings(Budget::Iterations(1))).map_err(anyhow::Error::msg)?;
-        let result =
-            render::render(&scene, &settings(Budget::Iterations(args.iterations))).map_err(anyhow::Error::msg)?;
-        let ms = 1e3 * result.elapsed.as_secs_f64() / args.iterations as f64;
-        println!("{:<22} {:>10} {:>14.1} {:>8}", builtin.name, algorithm.name(), ms, result.threads);
+    use AlgorithmName::*;
+    let algorithms = if args.algorithm.is_empty() { vec![Pt, Lt, Ppm, Bpm, Bpt, Vcm] } else { args.algorithm };
+    let masks: Vec<u32> = if args.scene.is_empty() {
+        BUILTIN_SCENES.iter().map(|s| s.mask).collect()
+    } else {
+        args.scene.iter().map(|s| scene_mask(s)).collect::<Result<_>>()?
+    };
+    println!(
+        "{:<22} {:>9} {:>13} {:>12} {:>15} {:>9} {:>8}",
+        "scene", "algorithm", "ms/iteration", "CPU-s/iter", "light vertices", "B/vertex", "threads"
+    );
+    for mask in masks {
+        let scene = build_scene(mask, args.resolution)?;
+        for name in &algorithms {
+            let algorithm = name.algorithm();
+            let settings =
+                |budget| RenderSettings { algorithm, budget, threads: args.threads, ..RenderSettings::default() };
+            render::render(&scene, &settings(Budget::Iterations(1))).map_err(anyhow::Error::msg)?;
+            let result =
+                render::render(&scene, &settings(Budget::Iterations(args.iterations))).map_err(anyhow::Error::msg)?;
+            let ms = 1e3 * result.elapsed.as_secs_f64() / args.iterations as f64;
+            let (vertices, bytes) = match result.light_vertices {
+                Some((count, bytes)) => (count.to_string(), bytes.to_string()),
+                None => ("-".to_string(), "-".to_string()),
+            };
+            println!(
+                "{:<22} {:>9} {:>13.1} {:>12.3} {:>15} {:>9} {:>8}",
+                scene.name,
+                algorithm.name(),
+                ms,
+                ms * result.threads as f64 / 1e3,
+                vertices,
+                bytes,
+                result.threads
+            );
+        }
     }
     Ok(())
 }

@@ -16,7 +16,7 @@ use spectrum::Rgb;
 
 use crate::eye_light;
 use crate::path_tracer::PathTracer;
-use crate::vcm::{VcmAlgorithm, VcmEngine, VcmSettings};
+use crate::vcm::{RadiusMode, VcmAlgorithm, VcmEngine, VcmSettings};
 
 /// The rendering algorithms. The names are the command-line spellings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -80,6 +80,10 @@ pub struct RenderSettings {
     pub radius_factor: f32,
     /// Merging radius reduction α.
     pub radius_alpha: f32,
+    /// Global or per-pixel merging radius.
+    pub radius_mode: RadiusMode,
+    /// Memory-efficient progressive mode of the VCM engine (tech report §6.2).
+    pub memory_efficient: bool,
 }
 
 impl Default for RenderSettings {
@@ -93,6 +97,8 @@ impl Default for RenderSettings {
             progress: false,
             radius_factor: 0.003,
             radius_alpha: 0.75,
+            radius_mode: RadiusMode::Global,
+            memory_efficient: false,
         }
     }
 }
@@ -145,6 +151,8 @@ impl<'a> Renderer<'a> {
                     max_length: settings.max_length,
                     radius_factor: settings.radius_factor,
                     radius_alpha: settings.radius_alpha,
+                    radius_mode: settings.radius_mode,
+                    memory_efficient: settings.memory_efficient,
                 },
             ))),
         };

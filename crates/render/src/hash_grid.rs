@@ -341,6 +341,25 @@ impl HashGrid {
     /// bounding box, or with a NaN coordinate, visits nothing.
     #[inline]
     pub fn for_each_in_radius(&self, query: Vec3, mut visit: impl FnMut(usize)) {
+        self.for_each_slot(query, self.radius_sq, |slot| visit(self.indices[slot] as usize));
+    }
+
+    /// The stored point indices in slot order (bucket by bucket). Data laid out in this order
+    /// is read contiguously by [`HashGrid::for_each_slot_within`].
+    pub fn sorted_indices(&self) -> &[u32] {
+        &self.indices
+    }
+
+    /// Like [`HashGrid::for_each_in_radius`] but for a radius `radius ≤` the build radius (it is
+    /// clamped to it), and passing the point's *slot*: its position in
+    /// [`HashGrid::sorted_indices`].
+    pub fn for_each_slot_within(&self, query: Vec3, radius: f32, visit: impl FnMut(usize)) {
+        let radius_sq = (radius * radius).min(self.radius_sq);
+        self.for_each_slot(query, radius_sq, visit);
+    }
+
+    /// Visits the slots of the points within `sqrt(radius_sq)` (at most the build radius).
+    fn for_each_slot(&self, query: Vec3, radius_sq: f32, mut visit: impl FnMut(usize)) {
         if self.indices.is_empty() || !query.is_finite() {
             return;
         }
@@ -359,7 +378,7 @@ impl HashGrid {
         }
         if cell_count > MAX_QUERY_CELLS as u64 {
             // Only when float precision is exhausted (points spread over > ~10⁷ cells).
-            self.visit_slice(0, self.indices.len(), query, &mut visit);
+            self.visit_slice(0, self.indices.len(), query, radius_sq, &mut visit);
             return;
         }
 
@@ -379,16 +398,15 @@ impl HashGrid {
         for &bucket in &buckets[..bucket_count] {
             let start = self.starts[bucket as usize] as usize;
             let end = self.starts[bucket as usize + 1] as usize;
-            self.visit_slice(start, end, query, &mut visit);
+            self.visit_slice(start, end, query, radius_sq, &mut visit);
         }
     }
 
-    /// Visits the points of `start..end` (in sorted order) within the radius of `query`.
     #[inline]
-    fn visit_slice(&self, start: usize, end: usize, query: Vec3, visit: &mut impl FnMut(usize)) {
-        for (p, &index) in self.sorted_positions[start..end].iter().zip(&self.indices[start..end]) {
-            if (*p - query).length_squared() <= self.radius_sq {
-                visit(index as usize);
+    fn visit_slice(&self, start: usize, end: usize, query: Vec3, radius_sq: f32, visit: &mut impl FnMut(usize)) {
+        for (offset, p) in self.sorted_positions[start..end].iter().enumerate() {
+            if (*p - query).length_squared() <= radius_sq {
+                visit(start + offset);
             }
         }
     }

@@ -294,21 +294,23 @@ impl Oracle {
     }
 }
 
-/// The engine's recursive weights for every technique the oracle lists.
-fn recursive_weight(path: &TestPath, technique: Technique, kc: &MisConstants) -> f32 {
+/// The engine's recursive weights for every technique the oracle lists. The light sub-path is
+/// walked with `light_k`; when that differs from `kc` (another radius: per-pixel radius or the
+/// previous iteration's vertices), its vertices are rebased with cVC/cVM (eqs. 62, 63).
+fn recursive_weight(path: &TestPath, technique: Technique, kc: &MisConstants, light_k: &MisConstants) -> f32 {
     let k = path.k();
     let (p0_trace, p0_connect, emission_pdf) = path.light_pdfs();
     // Light sub-path: MIS state at each vertex x1…x(k−1) after arriving there.
     let mut light_states = vec![SubPathMis::default(); k];
     let cos_light = if path.light.is_finite() { path.cos(0, 1) } else { 1.0 };
-    let mut state = SubPathMis::light_start(emission_pdf, p0_trace, cos_light, path.light.is_delta(), kc);
+    let mut state = SubPathMis::light_start(emission_pdf, p0_trace, cos_light, path.light.is_delta(), light_k);
     for i in 1..k {
         let d2 = if i == 1 && !path.light.is_finite() { None } else { Some(path.dist2(i - 1, i)) };
         state.arrive(d2, path.cos(i, i - 1));
-        light_states[i] = state;
+        light_states[i] = if light_k == kc { state } else { state.for_constants(kc) };
         if i + 1 < k {
             let (f, r) = path.scatter_pdfs(i, i - 1, i + 1);
-            state.scatter(path.cos(i, i + 1), f, r, path.is_specular(i), kc);
+            state.scatter(path.cos(i, i + 1), f, r, path.is_specular(i), light_k);
         }
     }
     // Camera sub-path: MIS state at x(k−1)…x0 after arriving there.
@@ -370,8 +372,15 @@ fn recursive_weight(path: &TestPath, technique: Technique, kc: &MisConstants) ->
 }
 
 fn check_mode(name: &str, connect: bool, merge: bool) {
+    check(name, connect, merge, 0.02);
+}
+
+/// Checks the weights for camera paths of radius 0.02 with light sub-paths traced for
+/// `light_radius`.
+fn check(name: &str, connect: bool, merge: bool, light_radius: f32) {
     let mut rng = Rng::for_stream(2012, 0, 0);
     let kc = MisConstants::new(4096, 0.02, connect, merge);
+    let light_k = MisConstants::new(4096, light_radius, connect, merge);
     let lights = [LightKind::Area, LightKind::Point, LightKind::Directional, LightKind::Environment];
     let mut checked_paths = 0;
     let mut checked_weights = 0;
@@ -387,7 +396,7 @@ fn check_mode(name: &str, connect: bool, merge: bool) {
         let mut sum = 0.0f64;
         for &(technique, _) in &oracle.techniques {
             let expected = oracle.weight(technique);
-            let got = recursive_weight(&path, technique, &kc) as f64;
+            let got = recursive_weight(&path, technique, &kc, &light_k) as f64;
             sum += got;
             let error = (got - expected).abs() / expected.max(1e-3);
             worst = worst.max(error);
@@ -418,6 +427,14 @@ fn bpt_weights_match_the_oracle() {
 #[test]
 fn bpm_weights_match_the_oracle() {
     check_mode("bpm", false, true);
+}
+
+#[test]
+fn rebased_light_vertices_give_the_weights_of_the_camera_paths_radius() {
+    // Per-pixel radius (§6.1) and merging with the previous iteration's vertices (§6.2): the
+    // light vertices' quantities, computed for another radius, are rebuilt from cVC and cVM.
+    check("vcm, light vertices traced for radius 0.05", true, true, 0.05);
+    check("bpm, light vertices traced for radius 0.007", false, true, 0.007);
 }
 
 #[test]

@@ -9,19 +9,10 @@ use spectrum::Rgb;
 
 use super::connect::{connect_vertices, next_event};
 use super::light_vertex::LightVertex;
-use super::merge::{MergeWeighting, merge};
+use super::merge::{MergeSource, MergeWeighting, merge};
 use super::mis::{self, SubPathMis};
 use super::subpath::SubPath;
 use super::{Family, FamilyValues, Iteration, Techniques};
-use crate::hash_grid::HashGrid;
-
-/// Light vertices a camera path may merge with.
-pub struct MergeSource<'a> {
-    /// The vertices the grid was built over.
-    pub vertices: &'a [LightVertex],
-    /// The range-search structure.
-    pub grid: &'a HashGrid,
-}
 
 /// Traces the camera sub-path through raster pixel `(x, y)` and returns its contributions by
 /// technique family.
@@ -36,7 +27,10 @@ pub fn trace_camera_path(
     light_path: &[LightVertex],
     merge_source: Option<&MergeSource>,
 ) -> FamilyValues {
-    let k = &it.constants;
+    let pixel = (y * scene.camera.width + x) as usize;
+    // The constants (radius) of this camera path: global, or the pixel's own (§6.1).
+    let k = &it.pixel_constants(pixel);
+    let radius = it.pixel_radius(pixel);
     let mut out = FamilyValues::default();
     let camera = &scene.camera;
     let raster = Vec2::new(x as f32 + rng.uniform(), y as f32 + rng.uniform());
@@ -95,13 +89,13 @@ pub fn trace_camera_path(
                     if light.path_length + 1 + path.path_length > it.max_length {
                         break;
                     }
-                    out.add(Family::Connection, connect_vertices(scene, &path, &bsdf, hit.position, light, k));
+                    let value = connect_vertices(scene, &path, &bsdf, hit.position, light, it.rebase(), k);
+                    out.add(Family::Connection, value);
                 }
             }
             if let Some(source) = merge_source {
                 let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
-                let merged =
-                    merge(&path, &bsdf, hit.position, source.vertices, source.grid, it.max_length, weighting, k);
+                let merged = merge(&path, &bsdf, hit.position, source, radius, it.max_length, weighting, k);
                 out.add(Family::Merging, merged);
                 // Photon mapping stops at the first non-specular vertex; through a mixed
                 // vertex it continues along the specular lobes only.

@@ -6,6 +6,7 @@ use math::{Rng, Vec3};
 use scene::{Bsdf, Scene};
 use spectrum::Rgb;
 
+use super::Iteration;
 use super::light_vertex::LightVertex;
 use super::mis::{self, ConnectionPdfs, MisConstants, NeePdfs};
 use super::subpath::SubPath;
@@ -21,17 +22,22 @@ pub struct Splat {
 
 /// Connects light sub-path vertex `position` (with `bsdf`) to the camera (t = 1). Returns the
 /// splat, or `None` if the vertex is outside the image, faces away or is occluded.
-/// `weighted = false` gives plain light tracing (weight 1).
+/// `weighted = false` gives plain light tracing (weight 1). The weight uses the constants of
+/// the pixel the vertex lands in.
 pub fn connect_to_camera(
     scene: &Scene,
     light: &SubPath,
     bsdf: &Bsdf,
     position: Vec3,
     weighted: bool,
-    k: &MisConstants,
+    it: &Iteration,
 ) -> Option<Splat> {
     let camera = &scene.camera;
     let raster = camera.raster_position(position)?;
+    let x = (raster.x as u32).min(camera.width - 1);
+    let y = (raster.y as u32).min(camera.height - 1);
+    let pixel = y * camera.width + x;
+    let k = &it.pixel_constants(pixel as usize);
     let to_camera = camera.position - position;
     let distance = to_camera.length();
     let direction = to_camera / distance;
@@ -42,7 +48,8 @@ pub fn connect_to_camera(
     let camera_pdf_a = camera.solid_angle_pdf(cos_at_camera).to_area(distance * distance, eval.cos_generated).0;
     let weight = if weighted {
         let reverse = eval.pdf.reverse.0 * bsdf.continuation_probability();
-        mis::camera_connection_weight(&light.mis, camera_pdf_a, reverse, k)
+        let light_mis = if it.rebase() { light.mis.for_constants(k) } else { light.mis };
+        mis::camera_connection_weight(&light_mis, camera_pdf_a, reverse, k)
     } else {
         1.0
     };
@@ -51,9 +58,7 @@ pub fn connect_to_camera(
     if value.is_black() || scene.occluded(position, direction, distance) {
         return None;
     }
-    let x = (raster.x as u32).min(camera.width - 1);
-    let y = (raster.y as u32).min(camera.height - 1);
-    Some(Splat { pixel: y * camera.width + x, value })
+    Some(Splat { pixel, value })
 }
 
 /// Next-event estimation from camera vertex `position` (s = 1), MIS-weighted (eqs. 44, 45).
@@ -88,13 +93,16 @@ pub fn next_event(
 }
 
 /// Connects camera vertex `position` (with `bsdf`) to a light vertex (s, t > 1), MIS-weighted
-/// (eqs. 40, 41).
+/// (eqs. 40, 41) with the camera path's constants `k`; `rebase` rebuilds the light vertex's
+/// dVC/dVM for them (eqs. 62, 63).
+#[allow(clippy::too_many_arguments)]
 pub fn connect_vertices(
     scene: &Scene,
     camera: &SubPath,
     bsdf: &Bsdf,
     position: Vec3,
     light: &LightVertex,
+    rebase: bool,
     k: &MisConstants,
 ) -> Rgb {
     let to_light = light.position - position;
@@ -112,7 +120,8 @@ pub fn connect_vertices(
         light_forward_a: light_eval.pdf.forward.0 * light.continuation * camera_eval.cos_generated * inv_d2,
         light_reverse_w: light_eval.pdf.reverse.0 * light.continuation,
     };
-    let weight = mis::connection_weight(&light.mis, &camera.mis, &pdfs, k);
+    let light_mis = if rebase { light.mis.for_constants(k) } else { light.mis };
+    let weight = mis::connection_weight(&light_mis, &camera.mis, &pdfs, k);
     let geometry = camera_eval.cos_generated * light_eval.cos_generated * inv_d2;
     let value = camera_eval.value * light_eval.value * (weight * geometry);
     if value.is_black() || scene.occluded(position, direction, distance) {

@@ -63,7 +63,7 @@ pub fn trace_light_path(
             }
             if techniques.connect_to_camera()
                 && path.path_length < it.max_length
-                && let Some(splat) = connect_to_camera(scene, &path, &bsdf, hit.position, techniques.connect, k)
+                && let Some(splat) = connect_to_camera(scene, &path, &bsdf, hit.position, techniques.connect, it)
             {
                 splats.push(splat);
             }

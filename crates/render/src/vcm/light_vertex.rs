@@ -65,3 +65,35 @@ impl LightVertexStore {
     /// Bytes per stored vertex.
     pub const BYTES_PER_VERTEX: usize = std::mem::size_of::<LightVertex>();
 }
+
+/// What merging needs of a light vertex (64 bytes), stored in the range-search grid's slot
+/// order so that a query reads neighbouring vertices from contiguous memory. In the
+/// memory-efficient mode this is all that is kept of a light vertex.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MergeVertex {
+    /// Position on the surface.
+    pub position: Vec3,
+    /// Unit direction towards the previous vertex.
+    pub fixed: Vec3,
+    /// Throughput of the light sub-path up to this vertex.
+    pub throughput: Rgb,
+    /// MIS quantities at this vertex.
+    pub mis: SubPathMis,
+    /// Segments from the light to this vertex.
+    pub path_length: u32,
+    /// Russian-roulette continuation probability of the vertex's BSDF.
+    pub continuation: f32,
+}
+
+impl From<&LightVertex> for MergeVertex {
+    fn from(v: &LightVertex) -> Self {
+        Self {
+            position: v.position,
+            fixed: v.fixed,
+            throughput: v.throughput,
+            mis: v.mis,
+            path_length: v.path_length,
+            continuation: v.continuation,
+        }
+    }
+}

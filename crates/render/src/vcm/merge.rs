@@ -5,7 +5,7 @@ use math::Vec3;
 use scene::Bsdf;
 use spectrum::Rgb;
 
-use super::light_vertex::LightVertex;
+use super::light_vertex::MergeVertex;
 use super::mis::{self, MisConstants};
 use super::subpath::SubPath;
 use crate::hash_grid::HashGrid;
@@ -19,24 +19,35 @@ pub enum MergeWeighting {
     None,
 }
 
-/// The merged contribution at camera vertex `position` (throughput and kernel normalisation
-/// included). `vertices` are the ones `grid` was built over; `light_mis` maps a stored vertex's
-/// MIS quantities to this camera path's constants.
+/// The light vertices a camera vertex merges with.
+#[derive(Clone, Copy)]
+pub struct MergeSource<'a> {
+    /// Vertices in the grid's slot order.
+    pub vertices: &'a [MergeVertex],
+    /// The range-search structure over them.
+    pub grid: &'a HashGrid,
+    /// The vertices' dVC/dVM were computed for other constants (another radius or iteration):
+    /// rebuild them from cVC/cVM (eqs. 62, 63).
+    pub rebase: bool,
+}
+
+/// The merged contribution at camera vertex `position` within `radius` (throughput and kernel
+/// normalisation included).
 #[allow(clippy::too_many_arguments)]
 pub fn merge(
     camera: &SubPath,
     bsdf: &Bsdf,
     position: Vec3,
-    vertices: &[LightVertex],
-    grid: &HashGrid,
+    source: &MergeSource,
+    radius: f32,
     max_length: u32,
     weighting: MergeWeighting,
     k: &MisConstants,
 ) -> Rgb {
     let continuation = bsdf.continuation_probability();
     let mut sum = Rgb::BLACK;
-    grid.for_each_in_radius(position, |index| {
-        let light = &vertices[index];
+    source.grid.for_each_slot_within(position, radius, |slot| {
+        let light = &source.vertices[slot];
         // A merged path is one segment shorter than a connected one.
         if light.path_length + camera.path_length > max_length {
             return;
@@ -45,11 +56,12 @@ pub fn merge(
         let weight = match weighting {
             MergeWeighting::None => 1.0,
             MergeWeighting::Mis => {
+                let light_mis = if source.rebase { light.mis.for_constants(k) } else { light.mis };
                 // The reverse density belongs to the camera BSDF, but the light sub-path's
                 // Russian roulette would have governed it.
                 let forward = eval.pdf.forward.0 * continuation;
                 let reverse = eval.pdf.reverse.0 * light.continuation;
-                mis::merge_weight(&light.mis, &camera.mis, forward, reverse, k)
+                mis::merge_weight(&light_mis, &camera.mis, forward, reverse, k)
             }
         };
         sum += eval.value * light.throughput * weight;

@@ -30,16 +30,17 @@ pub mod merge;
 pub mod mis;
 pub mod subpath;
 
-use math::Rng;
+use math::{Rng, Vec2};
 use rayon::prelude::*;
 use scene::{FrameBuffer, Scene};
 use spectrum::Rgb;
 
 use crate::hash_grid::HashGrid;
-use camera_pass::{MergeSource, trace_camera_path};
+use camera_pass::trace_camera_path;
 use connect::Splat;
 use light_pass::trace_light_path;
-use light_vertex::{LightVertex, LightVertexStore};
+use light_vertex::{LightVertex, LightVertexStore, MergeVertex};
+use merge::MergeSource;
 use mis::MisConstants;
 
 /// The algorithms of the VCM engine.
@@ -143,6 +144,18 @@ impl FamilyValues {
     }
 }
 
+/// How the merging radius is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RadiusMode {
+    /// One radius for the whole image: `radius_factor` × the scene's bounding-sphere radius.
+    Global,
+    /// Per pixel (§6.1): the radius of a disc with the area of the pixel's footprint at the
+    /// first surface its centre sees (the global radius where it sees nothing). The light
+    /// vertices carry the radius-free cVC, cVM, and every full path is weighted with the radius
+    /// of its pixel, so the weights of all its techniques still sum to one.
+    PerPixel,
+}
+
 /// Settings of the engine.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VcmSettings {
@@ -154,38 +167,84 @@ pub struct VcmSettings {
     pub radius_factor: f32,
     /// Radius reduction α: r_i = r_0 · (i+1)^((α−1)/2).
     pub radius_alpha: f32,
+    /// Global or per-pixel radius.
+    pub radius_mode: RadiusMode,
+    /// Memory-efficient progressive mode (§6.2): each pixel traces its light sub-path right
+    /// before its camera sub-path and connects to it; merging uses the previous iteration's
+    /// light vertices, of which only the 64-byte merging data is kept.
+    pub memory_efficient: bool,
 }
 
 impl VcmSettings {
-    /// Defaults: radius factor 0.003, α = 0.75, 10 segments.
+    /// Defaults: radius factor 0.003, α = 0.75, 10 segments, global radius, two-stage mode.
     pub fn new(algorithm: VcmAlgorithm) -> Self {
-        Self { algorithm, max_length: 10, radius_factor: 0.003, radius_alpha: 0.75 }
+        Self {
+            algorithm,
+            max_length: 10,
+            radius_factor: 0.003,
+            radius_alpha: 0.75,
+            radius_mode: RadiusMode::Global,
+            memory_efficient: false,
+        }
     }
 }
 
 /// Per-iteration values shared by the passes.
 #[derive(Clone, Copy, Debug)]
-pub struct Iteration {
-    /// MIS constants.
+pub struct Iteration<'a> {
+    /// MIS constants of the global radius.
     pub constants: MisConstants,
     /// Maximum path length in segments.
     pub max_length: u32,
-    /// Merging radius.
+    /// Global merging radius (the grid's radius).
     pub radius: f32,
+    /// Per-pixel radii of this iteration ([`RadiusMode::PerPixel`]).
+    pub pixel_radii: Option<&'a [f32]>,
+    /// Which families are on.
+    pub techniques: Techniques,
+}
+
+impl Iteration<'_> {
+    /// The merging radius of camera paths through `pixel`.
+    #[inline]
+    pub fn pixel_radius(&self, pixel: usize) -> f32 {
+        self.pixel_radii.map_or(self.radius, |r| r[pixel])
+    }
+
+    /// The MIS constants of full paths through `pixel`.
+    #[inline]
+    pub fn pixel_constants(&self, pixel: usize) -> MisConstants {
+        match self.pixel_radii {
+            None => self.constants,
+            Some(r) => MisConstants::new(
+                self.constants.light_path_count as usize,
+                r[pixel],
+                self.techniques.connect,
+                self.techniques.merge,
+            ),
+        }
+    }
+
+    /// Whether stored light vertices must be re-weighted for a camera path's constants.
+    #[inline]
+    pub fn rebase(&self) -> bool {
+        self.pixel_radii.is_some()
+    }
 }
 
 /// Statistics of the last iteration.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct IterationStats {
-    /// Light vertices stored.
+    /// Light vertices stored for merging or connection.
     pub light_vertices: usize,
-    /// Bytes per stored light vertex.
+    /// Bytes per stored light vertex (80 in the two-stage mode — 64 more for the merging copy
+    /// when merging —, 64 in the memory-efficient mode).
     pub bytes_per_vertex: usize,
     /// Light-tracing splats.
     pub splats: usize,
     /// Non-finite contributions discarded.
     pub rejected: u64,
-    /// Merging radius used.
+    /// Global merging radius used.
     pub radius: f32,
 }
 
@@ -196,26 +255,46 @@ const LIGHT_CHUNK: usize = 1024;
 /// Offset that separates the random streams of light sub-paths from those of camera paths.
 const LIGHT_STREAM: u64 = 1 << 62;
 
-/// The engine and its per-iteration buffers.
+/// Iteration index of the extra light pass that seeds merging in the memory-efficient mode.
+const SEED_ITERATION: u64 = u64::MAX;
+
+/// The engine and its buffers (kept across iterations).
 pub struct VcmEngine {
     settings: VcmSettings,
     techniques: Techniques,
     base_radius: f32,
+    /// Per-pixel footprint radii before the iteration schedule (per-pixel mode).
+    pixel_footprints: Option<Vec<f32>>,
+    pixel_radii: Vec<f32>,
     store: LightVertexStore,
+    merge_vertices: Vec<MergeVertex>,
     grid: HashGrid,
     /// Per-pixel contributions by family of the last iteration, when requested.
     family_frames: Option<Vec<FamilyValues>>,
     stats: IterationStats,
 }
 
+/// One chunk of light sub-paths: vertices, per-path ends (relative), splats.
+type LightChunk = (Vec<LightVertex>, Vec<u32>, Vec<Splat>);
+
+/// One image row of the single-stage mode: light vertices, splats, per-pixel family values and
+/// rejected estimates.
+type RowResult = (Vec<LightVertex>, Vec<Splat>, Vec<FamilyValues>, u64);
+
 impl VcmEngine {
     /// An engine for `scene`.
     pub fn new(scene: &Scene, settings: VcmSettings) -> Self {
+        let base_radius = settings.radius_factor * scene.bounding_sphere.radius;
+        let pixel_footprints =
+            (settings.radius_mode == RadiusMode::PerPixel).then(|| pixel_footprints(scene, base_radius));
         Self {
             settings,
             techniques: Techniques::of(settings.algorithm),
-            base_radius: settings.radius_factor * scene.bounding_sphere.radius,
+            base_radius,
+            pixel_footprints,
+            pixel_radii: Vec::new(),
             store: LightVertexStore::default(),
+            merge_vertices: Vec::new(),
             grid: HashGrid::new(),
             family_frames: None,
             stats: IterationStats::default(),
@@ -239,133 +318,301 @@ impl VcmEngine {
         self.stats
     }
 
-    /// The merging radius of iteration `iteration` (0-based): r_0 · (i+1)^((α−1)/2).
+    /// The radius-reduction factor of iteration `iteration` (0-based): (i+1)^((α−1)/2).
+    fn schedule(&self, iteration: u64) -> f32 {
+        ((iteration.saturating_add(1)) as f32).powf(0.5 * (self.settings.radius_alpha - 1.0))
+    }
+
+    /// The global merging radius of iteration `iteration` (0-based): r_0 · (i+1)^((α−1)/2).
     pub fn radius(&self, iteration: u64) -> f32 {
-        let exponent = 0.5 * (self.settings.radius_alpha - 1.0);
-        (self.base_radius * ((iteration + 1) as f32).powf(exponent)).max(1e-7)
+        (self.base_radius * self.schedule(iteration)).max(1e-7)
     }
 
     /// Renders iteration `iteration` into `frame` (overwritten). Returns the number of rejected
     /// (non-finite) contributions.
     pub fn run_iteration(&mut self, scene: &Scene, seed: u64, iteration: u64, frame: &mut FrameBuffer) -> u64 {
         let pixel_count = frame.pixels.len();
-        let radius = self.radius(iteration);
         let techniques = self.techniques;
+        let schedule = self.schedule(iteration);
+        let mut radius = self.radius(iteration);
+        // Taken out of `self` for the iteration, so the passes can borrow the engine mutably.
+        let mut pixel_radii = std::mem::take(&mut self.pixel_radii);
+        if let Some(footprints) = &self.pixel_footprints {
+            pixel_radii.clear();
+            pixel_radii.extend(footprints.iter().map(|r| (r * schedule).max(1e-7)));
+            // The grid must cover the largest per-pixel radius.
+            radius = pixel_radii.iter().fold(0.0f32, |a, b| a.max(*b));
+        }
         let it = Iteration {
             constants: MisConstants::new(pixel_count, radius, techniques.connect, techniques.merge),
             max_length: self.settings.max_length,
             radius,
+            pixel_radii: self.pixel_footprints.as_ref().map(|_| pixel_radii.as_slice()),
+            techniques,
         };
+        let (rejected, splats) = if self.settings.memory_efficient && !techniques.light_trace_only {
+            self.run_single_stage(scene, seed, iteration, &it, frame)
+        } else {
+            self.run_two_stages(scene, seed, iteration, &it, frame)
+        };
+        self.pixel_radii = pixel_radii;
+        self.stats.splats = splats;
+        self.stats.rejected = rejected;
+        self.stats.radius = radius;
+        rejected
+    }
 
-        // Light pass.
-        let chunks: Vec<(Vec<LightVertex>, Vec<u32>, Vec<Splat>)> = (0..pixel_count.div_ceil(LIGHT_CHUNK))
-            .into_par_iter()
-            .map(|chunk| {
-                let mut vertices = Vec::new();
-                let mut ends = Vec::new();
-                let mut splats = Vec::new();
-                let end = ((chunk + 1) * LIGHT_CHUNK).min(pixel_count);
-                for path in chunk * LIGHT_CHUNK..end {
-                    let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
-                    trace_light_path(scene, &it, &techniques, &mut rng, &mut vertices, &mut splats);
-                    ends.push(vertices.len() as u32);
-                }
-                (vertices, ends, splats)
-            })
-            .collect();
+    /// The two-stage iteration (§2.3): all light sub-paths, the grid, then all camera paths.
+    fn run_two_stages(
+        &mut self,
+        scene: &Scene,
+        seed: u64,
+        iteration: u64,
+        it: &Iteration,
+        frame: &mut FrameBuffer,
+    ) -> (u64, usize) {
+        let pixel_count = frame.pixels.len();
+        let chunks = trace_light_chunks(scene, seed, iteration, it, pixel_count);
         self.store.clear();
-        let mut splat_count = 0;
-        for (vertices, ends, splats) in &chunks {
+        for (vertices, ends, _) in &chunks {
             let base = self.store.vertices.len() as u32;
             self.store.vertices.extend_from_slice(vertices);
             self.store.path_ends.extend(ends.iter().map(|e| e + base));
-            splat_count += splats.len();
         }
-        if techniques.merge {
-            let positions: Vec<math::Vec3> = self.store.vertices.iter().map(|v| v.position).collect();
-            self.grid.build(&positions, radius);
+        if it.techniques.merge {
+            self.build_merge_grid(it.radius);
         }
-
-        // Camera pass.
-        let width = frame.width as usize;
         let store = &self.store;
-        let grid = &self.grid;
-        let merge_source = techniques.merge.then_some(MergeSource { vertices: &store.vertices, grid });
-        let trace = |index: usize| -> FamilyValues {
-            if techniques.light_trace_only {
+        let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: it.rebase() };
+        let merge_source = it.techniques.merge.then_some(source);
+        let width = frame.width as usize;
+        let mut rejected = render_pixels(frame, self.family_frames.as_mut(), |index| {
+            if it.techniques.light_trace_only {
                 return FamilyValues::default();
             }
             let mut rng = Rng::for_stream(seed, iteration, index as u64);
             let (x, y) = ((index % width) as u32, (index / width) as u32);
-            trace_camera_path(scene, &it, &techniques, x, y, &mut rng, store.path(index), merge_source.as_ref())
-        };
-        let mut rejected: u64 = match &mut self.family_frames {
-            None => frame
-                .pixels
-                .par_chunks_mut(width)
-                .enumerate()
-                .map(|(row, pixels)| {
-                    let mut rejected = 0;
-                    for (column, pixel) in pixels.iter_mut().enumerate() {
-                        *pixel = accept(trace(row * width + column).total(), &mut rejected);
-                    }
-                    rejected
-                })
-                .sum(),
-            Some(families) => {
-                families.clear();
-                families.resize(pixel_count, FamilyValues::default());
-                frame
-                    .pixels
-                    .par_chunks_mut(width)
-                    .zip(families.par_chunks_mut(width))
-                    .enumerate()
-                    .map(|(row, (pixels, family_row))| {
-                        let mut rejected = 0;
-                        for (column, (pixel, family)) in pixels.iter_mut().zip(family_row).enumerate() {
-                            let mut values = trace(row * width + column);
-                            if !values.total().is_finite() {
-                                values = FamilyValues::default();
-                                rejected += 1;
-                            }
-                            *family = values;
-                            *pixel = values.total();
-                        }
-                        rejected
-                    })
-                    .sum()
-            }
-        };
+            trace_camera_path(scene, it, &it.techniques, x, y, &mut rng, store.path(index), merge_source.as_ref())
+        });
+        let splats = chunks.iter().map(|c| c.2.len()).sum();
+        apply_splats(frame, self.family_frames.as_mut(), chunks.iter().map(|c| c.2.as_slice()), &mut rejected);
+        self.stats.light_vertices = self.store.vertices.len();
+        self.stats.bytes_per_vertex = LightVertexStore::BYTES_PER_VERTEX
+            + if it.techniques.merge { std::mem::size_of::<MergeVertex>() } else { 0 };
+        (rejected, splats)
+    }
 
-        // Light-tracing splats, in light sub-path order.
-        for (_, _, splats) in &chunks {
-            for splat in splats {
-                let value = accept(splat.value, &mut rejected);
-                frame.pixels[splat.pixel as usize] += value;
-                if let Some(families) = &mut self.family_frames {
-                    families[splat.pixel as usize].add(Family::LightTracing, value);
+    /// The memory-efficient single-stage iteration (§6.2).
+    fn run_single_stage(
+        &mut self,
+        scene: &Scene,
+        seed: u64,
+        iteration: u64,
+        it: &Iteration,
+        frame: &mut FrameBuffer,
+    ) -> (u64, usize) {
+        let pixel_count = frame.pixels.len();
+        if it.techniques.merge && iteration == 0 {
+            // Seed merging with an extra set of light sub-paths, used only for merging.
+            let chunks = trace_light_chunks(scene, seed, SEED_ITERATION, it, pixel_count);
+            self.store.clear();
+            for (vertices, _, _) in &chunks {
+                self.store.vertices.extend_from_slice(vertices);
+            }
+            self.build_merge_grid(it.radius);
+        }
+        // Every row traces its pixels' light sub-paths and camera paths; rows return their
+        // light vertices (for the next iteration's merging) and splats.
+        let width = frame.width as usize;
+        let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: true };
+        let merge_source = it.techniques.merge.then_some(source);
+        let family_frames = self.family_frames.as_mut();
+        let rows: Vec<RowResult> = frame
+            .pixels
+            .par_chunks_mut(width)
+            .enumerate()
+            .map(|(row, pixels)| {
+                let mut vertices = Vec::new();
+                let mut splats = Vec::new();
+                let mut families = Vec::new();
+                let mut rejected = 0;
+                for (column, pixel) in pixels.iter_mut().enumerate() {
+                    let index = row * width + column;
+                    let start = vertices.len();
+                    let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
+                    trace_light_path(scene, it, &it.techniques, &mut light_rng, &mut vertices, &mut splats);
+                    let mut rng = Rng::for_stream(seed, iteration, index as u64);
+                    let light_path = &vertices[start..];
+                    let mut values = trace_camera_path(
+                        scene,
+                        it,
+                        &it.techniques,
+                        column as u32,
+                        row as u32,
+                        &mut rng,
+                        light_path,
+                        merge_source.as_ref(),
+                    );
+                    if !values.total().is_finite() {
+                        values = FamilyValues::default();
+                        rejected += 1;
+                    }
+                    *pixel = values.total();
+                    families.push(values);
                 }
+                (vertices, splats, families, rejected)
+            })
+            .collect();
+        let mut rejected = 0;
+        if let Some(frames) = family_frames {
+            frames.clear();
+            for (_, _, families, _) in &rows {
+                frames.extend_from_slice(families);
             }
         }
+        self.store.clear();
+        for (vertices, _, _, row_rejected) in &rows {
+            self.store.vertices.extend_from_slice(vertices);
+            rejected += row_rejected;
+        }
+        let splats = rows.iter().map(|r| r.1.len()).sum();
+        apply_splats(frame, self.family_frames.as_mut(), rows.iter().map(|r| r.1.as_slice()), &mut rejected);
+        // This iteration's vertices serve the next iteration's merges, at its radius.
+        if it.techniques.merge {
+            let next = match &self.pixel_footprints {
+                None => self.radius(iteration + 1),
+                Some(f) => f.iter().fold(0.0f32, |a, b| a.max(*b)) * self.schedule(iteration + 1),
+            };
+            self.build_merge_grid(next.max(1e-7));
+        }
+        self.stats.light_vertices = self.merge_vertices.len();
+        self.stats.bytes_per_vertex = std::mem::size_of::<MergeVertex>();
+        (rejected, splats)
+    }
 
-        self.stats = IterationStats {
-            light_vertices: self.store.vertices.len(),
-            bytes_per_vertex: LightVertexStore::BYTES_PER_VERTEX,
-            splats: splat_count,
-            rejected,
-            radius,
-        };
-        rejected
+    /// Builds the grid over the stored light vertices and lays their merging data out in the
+    /// grid's slot order.
+    fn build_merge_grid(&mut self, radius: f32) {
+        let positions: Vec<math::Vec3> = self.store.vertices.iter().map(|v| v.position).collect();
+        self.grid.build(&positions, radius);
+        let vertices = &self.store.vertices;
+        self.merge_vertices.clear();
+        self.merge_vertices
+            .extend(self.grid.sorted_indices().iter().map(|&i| MergeVertex::from(&vertices[i as usize])));
     }
 }
 
-/// `value` if finite, else black and one more rejection.
-#[inline]
-fn accept(value: Rgb, rejected: &mut u64) -> Rgb {
-    if value.is_finite() {
-        value
-    } else {
-        *rejected += 1;
-        Rgb::BLACK
+/// Traces `pixel_count` light sub-paths of `iteration` in parallel chunks, in order.
+fn trace_light_chunks(scene: &Scene, seed: u64, iteration: u64, it: &Iteration, pixel_count: usize) -> Vec<LightChunk> {
+    (0..pixel_count.div_ceil(LIGHT_CHUNK))
+        .into_par_iter()
+        .map(|chunk| {
+            let mut vertices = Vec::new();
+            let mut ends = Vec::new();
+            let mut splats = Vec::new();
+            let end = ((chunk + 1) * LIGHT_CHUNK).min(pixel_count);
+            for path in chunk * LIGHT_CHUNK..end {
+                let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
+                trace_light_path(scene, it, &it.techniques, &mut rng, &mut vertices, &mut splats);
+                ends.push(vertices.len() as u32);
+            }
+            (vertices, ends, splats)
+        })
+        .collect()
+}
+
+/// Fills `frame` (and the family frames, if recorded) with `trace(pixel)` for every pixel, in
+/// parallel over rows. Returns the number of rejected (non-finite) pixel estimates.
+fn render_pixels(
+    frame: &mut FrameBuffer,
+    family_frames: Option<&mut Vec<FamilyValues>>,
+    trace: impl Fn(usize) -> FamilyValues + Sync,
+) -> u64 {
+    let width = frame.width as usize;
+    let pixel_count = frame.pixels.len();
+    let evaluate = |index: usize, rejected: &mut u64| {
+        let values = trace(index);
+        if values.total().is_finite() {
+            values
+        } else {
+            *rejected += 1;
+            FamilyValues::default()
+        }
+    };
+    match family_frames {
+        None => frame
+            .pixels
+            .par_chunks_mut(width)
+            .enumerate()
+            .map(|(row, pixels)| {
+                let mut rejected = 0;
+                for (column, pixel) in pixels.iter_mut().enumerate() {
+                    *pixel = evaluate(row * width + column, &mut rejected).total();
+                }
+                rejected
+            })
+            .sum(),
+        Some(families) => {
+            families.clear();
+            families.resize(pixel_count, FamilyValues::default());
+            frame
+                .pixels
+                .par_chunks_mut(width)
+                .zip(families.par_chunks_mut(width))
+                .enumerate()
+                .map(|(row, (pixels, family_row))| {
+                    let mut rejected = 0;
+                    for (column, (pixel, family)) in pixels.iter_mut().zip(family_row).enumerate() {
+                        *family = evaluate(row * width + column, &mut rejected);
+                        *pixel = family.total();
+                    }
+                    rejected
+                })
+                .sum()
+        }
     }
+}
+
+/// Adds light-tracing splats to the frame in the given (light sub-path) order.
+fn apply_splats<'s>(
+    frame: &mut FrameBuffer,
+    mut family_frames: Option<&mut Vec<FamilyValues>>,
+    splats: impl Iterator<Item = &'s [Splat]>,
+    rejected: &mut u64,
+) {
+    for splat in splats.flatten() {
+        let value = if splat.value.is_finite() {
+            splat.value
+        } else {
+            *rejected += 1;
+            Rgb::BLACK
+        };
+        frame.pixels[splat.pixel as usize] += value;
+        if let Some(families) = family_frames.as_deref_mut() {
+            families[splat.pixel as usize].add(Family::LightTracing, value);
+        }
+    }
+}
+
+/// Per-pixel merging radii before the iteration schedule: the radius of a disc with the area
+/// of the pixel's footprint at the first surface hit by the ray through its centre,
+/// `d·sqrt(cos³/π)/f` (d the distance, f the image-plane distance in pixels, cos at the
+/// camera). Pixels that see nothing get `fallback`.
+fn pixel_footprints(scene: &Scene, fallback: f32) -> Vec<f32> {
+    let camera = &scene.camera;
+    let width = camera.width as usize;
+    (0..camera.pixel_count())
+        .into_par_iter()
+        .map(|index| {
+            let raster = Vec2::new((index % width) as f32 + 0.5, (index / width) as f32 + 0.5);
+            let ray = camera.generate_ray(raster);
+            match scene.intersect(&ray) {
+                None => fallback,
+                Some(hit) => {
+                    let cos = camera.forward.dot(ray.direction);
+                    hit.distance * (cos * cos * cos / math::PI).sqrt() / camera.image_plane_distance()
+                }
+            }
+        })
+        .collect()
 }
