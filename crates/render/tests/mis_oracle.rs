@@ -9,6 +9,9 @@
 //! pinhole). Technique VC_s connects light vertex x_{s−1} to camera vertex x_s (s = 0: the
 //! camera path hits the light; s = k: light tracing, t = 1). VM_j merges at x_j.
 
+// Loops run over vertex numbers x_i of the path notation, which index several arrays.
+#![allow(clippy::needless_range_loop)]
+
 use math::{Frame, PI, Rng, Vec3};
 use render::vcm::mis::{self, ConnectionPdfs, MisConstants, NeePdfs, SubPathMis};
 use scene::material::fresnel_dielectric;
