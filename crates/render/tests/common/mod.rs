@@ -4,8 +4,10 @@
 #![allow(dead_code)]
 
 use math::Vec2;
+use math::Vec3;
 use render::driver::{Budget, Renderer};
 use render::{Algorithm, RenderSettings};
+use scene::shape::{Shape, Triangle};
 use scene::{Bsdf, Scene, TransportMode};
 use testkit::MeanVar;
 
@@ -62,12 +64,76 @@ pub fn settings(algorithm: &str, seed: u64) -> RenderSettings {
 }
 
 /// What the primary rays of a block see.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub struct BlockView {
     /// Some ray hits a purely specular surface.
     pub specular: bool,
     /// Some ray hits an emitter or escapes the scene.
     pub emitter_or_background: bool,
+    /// The smallest distance from a point some ray hits to another surface that is not in
+    /// the same plane: within it, a merging kernel of that radius reaches across an edge.
+    pub clearance: f32,
+}
+
+impl Default for BlockView {
+    fn default() -> Self {
+        Self { specular: false, emitter_or_background: false, clearance: f32::INFINITY }
+    }
+}
+
+/// Distance from `p` to the closest point of triangle `t` (Ericson, Real-Time Collision
+/// Detection §5.1.5, by Voronoi regions).
+fn distance_to_triangle(p: Vec3, t: &Triangle) -> f32 {
+    let (a, b, c) = (t.p0, t.p1, t.p2);
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (p - a).length();
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (p - b).length();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return (p - (a + ab * (d1 / (d1 - d3)))).length();
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (p - c).length();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return (p - (a + ac * (d2 / (d2 - d6)))).length();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return (p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))))).length();
+    }
+    let denominator = 1.0 / (va + vb + vc);
+    (p - (a + ab * (vb * denominator) + ac * (vc * denominator))).length()
+}
+
+/// Distance from `p` (on primitive `own`) to the nearest other primitive not in its plane.
+fn clearance(scene: &Scene, p: Vec3, own: usize) -> f32 {
+    let own_shape = scene.primitives[own].shape;
+    scene
+        .primitives
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i != own)
+        .map(|(_, other)| match (other.shape, own_shape) {
+            (Shape::Triangle(t), Shape::Triangle(o))
+                if t.normal.dot(o.normal) > 0.9999 && (t.p0 - o.p0).dot(o.normal).abs() < 1e-5 =>
+            {
+                f32::INFINITY
+            }
+            (Shape::Triangle(t), _) => distance_to_triangle(p, &t),
+            (Shape::Sphere(s), _) => ((p - s.center).length() - s.radius).abs(),
+        })
+        .fold(f32::INFINITY, f32::min)
 }
 
 /// Classifies every block by shooting a grid of primary rays through each of its pixels.
@@ -88,6 +154,7 @@ pub fn block_views(scene: &Scene, block: u32) -> Vec<BlockView> {
                             if hit.light.is_some() {
                                 view.emitter_or_background = true;
                             }
+                            view.clearance = view.clearance.min(clearance(scene, hit.position, hit.primitive as usize));
                             let bsdf =
                                 Bsdf::new(scene.material(&hit), hit.normal, -ray.direction, TransportMode::Radiance);
                             if bsdf.is_some_and(|b| b.is_delta()) {
