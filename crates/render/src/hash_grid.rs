@@ -92,16 +92,20 @@ impl CellMap {
         (s as u32).min(self.max_cell[axis])
     }
 
-    /// Bucket of the cell `(x, y, z)`.
+    /// Bucket of the cell `(x, y, z)`. Cells are grouped in blocks of 4×4×4 whose 64 cells get
+    /// consecutive buckets (in Morton order): the 2×2×2 cells of a query, and the queries of
+    /// neighbouring camera vertices, then read nearby memory. Blocks are spread by a hash.
     #[inline]
     fn bucket(&self, x: u32, y: u32, z: u32) -> u32 {
+        let low = (x & 1) | (y & 1) << 1 | (z & 1) << 2 | (x & 2) << 2 | (y & 2) << 3 | (z & 2) << 4;
+        let (x, y, z) = (x >> 2, y >> 2, z >> 2);
         // Pack (coordinates beyond 21 bits overlap; that is only a collision), then mix with the
         // SplitMix64 finaliser and keep high bits.
         let mut h = u64::from(x) ^ (u64::from(y) << 21) ^ (u64::from(z) << 42);
         h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
         h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
         h ^= h >> 31;
-        (h >> 32) as u32 & self.bucket_mask
+        (((h >> 32) as u32) << 6 | low) & self.bucket_mask
     }
 
     /// Bucket of a (finite) point.
@@ -360,6 +364,12 @@ impl HashGrid {
 
     /// Visits the slots of the points within `sqrt(radius_sq)` (at most the build radius).
     fn for_each_slot(&self, query: Vec3, radius_sq: f32, mut visit: impl FnMut(usize)) {
+        self.for_each_bucket(query, |start, end| self.visit_slice(start, end, query, radius_sq, &mut visit));
+    }
+
+    /// Calls `visit(start, end)` with the slot range of every distinct bucket a query at
+    /// `query` must look at.
+    fn for_each_bucket(&self, query: Vec3, mut visit: impl FnMut(usize, usize)) {
         if self.indices.is_empty() || !query.is_finite() {
             return;
         }
@@ -378,7 +388,7 @@ impl HashGrid {
         }
         if cell_count > MAX_QUERY_CELLS as u64 {
             // Only when float precision is exhausted (points spread over > ~10⁷ cells).
-            self.visit_slice(0, self.indices.len(), query, radius_sq, &mut visit);
+            visit(0, self.indices.len());
             return;
         }
 
@@ -396,9 +406,7 @@ impl HashGrid {
             }
         }
         for &bucket in &buckets[..bucket_count] {
-            let start = self.starts[bucket as usize] as usize;
-            let end = self.starts[bucket as usize + 1] as usize;
-            self.visit_slice(start, end, query, radius_sq, &mut visit);
+            visit(self.starts[bucket as usize] as usize, self.starts[bucket as usize + 1] as usize);
         }
     }
 

@@ -9,6 +9,7 @@
 //! together as a 64-byte, cache-line aligned pair, so the two child boxes of a node are tested
 //! with one cache line. Leaves name a range of the primitive index array. See `docs/bvh.md`.
 
+use arrayvec::ArrayVec;
 use glam::Vec4;
 use math::{Aabb, Ray, Vec3, Vec3A};
 use rayon::prelude::*;
@@ -253,8 +254,9 @@ impl Bvh {
         }
         let mut t_best = t_max;
         let mut best = None;
-        let mut stack: [(&Node, f32); MAX_DEPTH] = [(&self.root, 0.0); MAX_DEPTH];
-        let mut depth = 0;
+        // ArrayVec: a fixed-capacity stack that is not initialised up front (zeroing a 1 KiB
+        // array per ray cost ~10 % of a VCM iteration on the reference scenes).
+        let mut stack: ArrayVec<(&Node, f32), MAX_DEPTH> = ArrayVec::new();
         let mut node = &self.root;
         loop {
             if node.is_leaf() {
@@ -273,8 +275,7 @@ impl Bvh {
                         // Both hit: visit the nearer first, come back for the other.
                         let (near, far, t_far) =
                             if t_left <= t_right { (left, right, t_right) } else { (right, left, t_left) };
-                        stack[depth] = (far, t_far);
-                        depth += 1;
+                        stack.push((far, t_far));
                         node = near;
                     } else {
                         node = left;
@@ -287,11 +288,9 @@ impl Bvh {
             }
             // Pop the next node that may still hold a nearer hit.
             loop {
-                if depth == 0 {
+                let Some((next, t_enter)) = stack.pop() else {
                     return best.map(|prim| (prim, t_best));
-                }
-                depth -= 1;
-                let (next, t_enter) = stack[depth];
+                };
                 if t_enter <= t_best * ROBUST_EXIT {
                     node = next;
                     break;
@@ -325,8 +324,7 @@ impl Bvh {
         if test.entry(&self.root, t_max) == f32::INFINITY {
             return false;
         }
-        let mut stack: [&Node; MAX_DEPTH] = [&self.root; MAX_DEPTH];
-        let mut depth = 0;
+        let mut stack: ArrayVec<&Node, MAX_DEPTH> = ArrayVec::new();
         let mut node = &self.root;
         loop {
             if node.is_leaf() {
@@ -342,8 +340,7 @@ impl Bvh {
                 if t_left != f32::INFINITY {
                     if t_right != f32::INFINITY {
                         let (near, far) = if t_left <= t_right { (left, right) } else { (right, left) };
-                        stack[depth] = far;
-                        depth += 1;
+                        stack.push(far);
                         node = near;
                     } else {
                         node = left;
@@ -354,11 +351,8 @@ impl Bvh {
                     continue;
                 }
             }
-            if depth == 0 {
-                return false;
-            }
-            depth -= 1;
-            node = stack[depth];
+            let Some(next) = stack.pop() else { return false };
+            node = next;
         }
     }
 }
