@@ -288,7 +288,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         args.scene.iter().map(|s| scene_mask(s)).collect::<Result<_>>()?
     };
     println!(
-        "{:<22} {:>9} {:>13} {:>12} {:>15} {:>9} {:>8}",
+        "{:<22} {:>9} {:>13} {:>11} {:>15} {:>9} {:>8}",
         "scene", "algorithm", "ms/iteration", "CPU-s/iter", "light vertices", "B/vertex", "threads"
     );
     for mask in masks {
@@ -298,19 +298,24 @@ fn run_bench(args: BenchArgs) -> Result<()> {
             let settings =
                 |budget| RenderSettings { algorithm, budget, threads: args.threads, ..RenderSettings::default() };
             render::render(&scene, &settings(Budget::Iterations(1))).map_err(anyhow::Error::msg)?;
+            let cpu_before = process_cpu_seconds();
             let result =
                 render::render(&scene, &settings(Budget::Iterations(args.iterations))).map_err(anyhow::Error::msg)?;
             let ms = 1e3 * result.elapsed.as_secs_f64() / args.iterations as f64;
+            let cpu = match (cpu_before, process_cpu_seconds()) {
+                (Some(a), Some(b)) => format!("{:.3}", (b - a) / args.iterations as f64),
+                _ => "-".to_string(),
+            };
             let (vertices, bytes) = match result.light_vertices {
                 Some((count, bytes)) => (count.to_string(), bytes.to_string()),
                 None => ("-".to_string(), "-".to_string()),
             };
             println!(
-                "{:<22} {:>9} {:>13.1} {:>12.3} {:>15} {:>9} {:>8}",
+                "{:<22} {:>9} {:>13.1} {:>11} {:>15} {:>9} {:>8}",
                 scene.name,
                 algorithm.name(),
                 ms,
-                ms * result.threads as f64 / 1e3,
+                cpu,
                 vertices,
                 bytes,
                 result.threads
@@ -318,6 +323,17 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// CPU time (user + system, all threads) of this process in seconds, from `/proc/self/stat`
+/// (Linux; clock ticks of 1/100 s, the kernel's fixed USER_HZ). `None` elsewhere.
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let fields: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
+    let user: f64 = fields.get(11)?.parse().ok()?;
+    let system: f64 = fields.get(12)?.parse().ok()?;
+    Some((user + system) / 100.0)
 }
 
 fn main() -> ExitCode {

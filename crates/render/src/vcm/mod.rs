@@ -493,12 +493,15 @@ impl VcmEngine {
     /// Builds the grid over the stored light vertices and lays their merging data out in the
     /// grid's slot order.
     fn build_merge_grid(&mut self, radius: f32) {
-        let positions: Vec<math::Vec3> = self.store.vertices.iter().map(|v| v.position).collect();
+        let mut positions: Vec<math::Vec3> = Vec::new();
+        self.store.vertices.par_iter().map(|v| v.position).collect_into_vec(&mut positions);
         self.grid.build(&positions, radius);
         let vertices = &self.store.vertices;
-        self.merge_vertices.clear();
-        self.merge_vertices
-            .extend(self.grid.sorted_indices().iter().map(|&i| MergeVertex::from(&vertices[i as usize])));
+        self.grid
+            .sorted_indices()
+            .par_iter()
+            .map(|&i| MergeVertex::from(&vertices[i as usize]))
+            .collect_into_vec(&mut self.merge_vertices);
     }
 }
 
