@@ -288,7 +288,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         args.scene.iter().map(|s| scene_mask(s)).collect::<Result<_>>()?
     };
     println!(
-        "{:<22} {:>9} {:>13} {:>11} {:>15} {:>9} {:>8}",
+        "{:<22} {:>9} {:>13} {:>11} {:>15} {:>9} {:>8}  phases of the last iteration (ms)",
         "scene", "algorithm", "ms/iteration", "CPU-s/iter", "light vertices", "B/vertex", "threads"
     );
     for mask in masks {
@@ -310,8 +310,17 @@ fn run_bench(args: BenchArgs) -> Result<()> {
                 Some((count, bytes)) => (count.to_string(), bytes.to_string()),
                 None => ("-".to_string(), "-".to_string()),
             };
+            let phases = match result.vcm_stats {
+                Some(s) => format!(
+                    "  light {:.0}, grid {:.0}, camera {:.0}",
+                    s.phases.light_pass.as_secs_f64() * 1e3,
+                    s.phases.grid_build.as_secs_f64() * 1e3,
+                    s.phases.camera_pass.as_secs_f64() * 1e3
+                ),
+                None => String::new(),
+            };
             println!(
-                "{:<22} {:>9} {:>13.1} {:>11} {:>15} {:>9} {:>8}",
+                "{:<22} {:>9} {:>13.1} {:>11} {:>15} {:>9} {:>8}{phases}",
                 scene.name,
                 algorithm.name(),
                 ms,

@@ -114,6 +114,8 @@ pub struct RenderOutput {
     pub threads: usize,
     /// Light vertices stored in the last iteration and bytes per vertex (VCM engine only).
     pub light_vertices: Option<(usize, usize)>,
+    /// Statistics of the last iteration of the VCM engine.
+    pub vcm_stats: Option<crate::vcm::IterationStats>,
 }
 
 /// The integrator of a render, with its state across iterations.
@@ -240,8 +242,9 @@ pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderOutput, 
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
-    let light_vertices = renderer.vcm_engine().map(|e| (e.stats().light_vertices, e.stats().bytes_per_vertex));
-    Ok(RenderOutput { film, elapsed: start.elapsed(), threads: renderer.threads(), light_vertices })
+    let vcm_stats = renderer.vcm_engine().map(|e| e.stats());
+    let light_vertices = vcm_stats.map(|s| (s.light_vertices, s.bytes_per_vertex));
+    Ok(RenderOutput { film, elapsed: start.elapsed(), threads: renderer.threads(), light_vertices, vcm_stats })
 }
 
 fn make_progress_bar(settings: &RenderSettings) -> Option<ProgressBar> {

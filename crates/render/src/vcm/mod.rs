@@ -246,6 +246,19 @@ pub struct IterationStats {
     pub rejected: u64,
     /// Global merging radius used.
     pub radius: f32,
+    /// Wall-clock time of the phases (two-stage mode only).
+    pub phases: PhaseTimes,
+}
+
+/// Wall-clock time of the phases of a two-stage iteration.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Tracing light sub-paths, their camera connections, gathering their vertices.
+    pub light_pass: std::time::Duration,
+    /// Building the grid and laying out the merging data.
+    pub grid_build: std::time::Duration,
+    /// Tracing camera sub-paths with all their connections and merges.
+    pub camera_pass: std::time::Duration,
 }
 
 /// Light sub-paths are traced in chunks of this many; each chunk's vertices and splats are
@@ -372,6 +385,7 @@ impl VcmEngine {
         frame: &mut FrameBuffer,
     ) -> (u64, usize) {
         let pixel_count = frame.pixels.len();
+        let start = std::time::Instant::now();
         let chunks = trace_light_chunks(scene, seed, iteration, it, pixel_count);
         self.store.clear();
         for (vertices, ends, _) in &chunks {
@@ -379,9 +393,11 @@ impl VcmEngine {
             self.store.vertices.extend_from_slice(vertices);
             self.store.path_ends.extend(ends.iter().map(|e| e + base));
         }
+        let light_pass = start.elapsed();
         if it.techniques.merge {
             self.build_merge_grid(it.radius);
         }
+        let grid_build = start.elapsed() - light_pass;
         let store = &self.store;
         let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: it.rebase() };
         let merge_source = it.techniques.merge.then_some(source);
@@ -394,8 +410,10 @@ impl VcmEngine {
             let (x, y) = ((index % width) as u32, (index / width) as u32);
             trace_camera_path(scene, it, &it.techniques, x, y, &mut rng, store.path(index), merge_source.as_ref())
         });
+        let camera_pass = start.elapsed() - light_pass - grid_build;
         let splats = chunks.iter().map(|c| c.2.len()).sum();
         apply_splats(frame, self.family_frames.as_mut(), chunks.iter().map(|c| c.2.as_slice()), &mut rejected);
+        self.stats.phases = PhaseTimes { light_pass, grid_build, camera_pass };
         self.stats.light_vertices = self.store.vertices.len();
         self.stats.bytes_per_vertex = LightVertexStore::BYTES_PER_VERTEX
             + if it.techniques.merge { std::mem::size_of::<MergeVertex>() } else { 0 };
