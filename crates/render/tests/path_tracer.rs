@@ -2,44 +2,14 @@
 //! radiance of an emitter seen directly, an estimator without next-event estimation (which
 //! shares no MIS weights with the full one), and determinism across thread counts.
 
-use math::{Rng, Vec2, Vec3};
+mod common;
+
+use math::{Rng, Vec2};
 use render::driver::Budget;
 use render::path_tracer::PathTracer;
 use render::{Algorithm, RenderSettings};
-use scene::light::AreaLight;
-use scene::shape::{Shape, Triangle};
-use scene::{Camera, Light, Material, Primitive, Scene, cornell};
-use spectrum::Rgb;
+use scene::{Light, Scene, cornell};
 use testkit::{MeanVar, sidak, z_test_entries};
-
-/// A closed cube whose inner faces all emit `emission` and reflect diffusely with `albedo`.
-fn furnace(emission: f32, albedo: f32) -> Scene {
-    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-    let corners = [
-        c(-1., -1., -1.),
-        c(1., -1., -1.),
-        c(1., 1., -1.),
-        c(-1., 1., -1.),
-        c(-1., -1., 1.),
-        c(1., -1., 1.),
-        c(1., 1., 1.),
-        c(-1., 1., 1.),
-    ];
-    // Faces as corner quadruples, wound so that normals point into the cube.
-    let faces = [[0, 1, 2, 3], [4, 7, 6, 5], [0, 4, 5, 1], [3, 2, 6, 7], [0, 3, 7, 4], [1, 5, 6, 2]];
-    let mut primitives = Vec::new();
-    let mut lights = Vec::new();
-    for f in faces {
-        for tri in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
-            let t = Triangle::new(corners[tri[0]], corners[tri[1]], corners[tri[2]]);
-            assert!(t.normal.dot(-t.p0) > 0.0, "normals point inwards");
-            primitives.push(Primitive { shape: Shape::Triangle(t), material: 0, light: Some(lights.len() as u32) });
-            lights.push(Light::Area(AreaLight::new(t, Rgb::splat(emission))));
-        }
-    }
-    let camera = Camera::new(c(0.2, -0.3, 0.1), c(0.3, 1.0, 0.2), Vec3::Z, 90.0, 16, 16);
-    Scene::new("furnace", primitives, vec![Material::diffuse(Rgb::splat(albedo))], lights, camera)
-}
 
 /// Mean and standard error of `samples` path-traced camera rays through random raster points.
 fn estimate(scene: &Scene, tracer: PathTracer, samples: u64, seed: u64) -> MeanVar {
@@ -60,7 +30,7 @@ fn furnace_gives_the_geometric_series() {
     let cases = [(1.0f32, 0.5f32, 1u32), (1.0, 0.5, 2), (0.5, 0.8, 3), (1.0, 0.5, 10), (0.25, 0.9, 10)];
     let tests = cases.len() * 2;
     for (emission, albedo, max_length) in cases {
-        let scene = furnace(emission, albedo);
+        let scene = common::furnace(emission, albedo, 16);
         let expected: f64 = (0..max_length).map(|k| emission as f64 * (albedo as f64).powi(k as i32)).sum();
         for next_event_estimation in [true, false] {
             let tracer = PathTracer { max_length, next_event_estimation };
@@ -80,7 +50,7 @@ fn furnace_gives_the_geometric_series() {
 
 #[test]
 fn furnace_with_one_segment_is_exactly_the_emission() {
-    let scene = furnace(0.75, 0.5);
+    let scene = common::furnace(0.75, 0.5, 16);
     let stats = estimate(&scene, PathTracer::new(1), 1000, 3);
     assert_eq!(stats.mean(), 0.75);
     assert_eq!(stats.variance(), 0.0);

@@ -712,26 +712,7 @@ mod tests {
 
     /// Möller–Trumbore, accepting `0 < t < t_max`.
     fn intersect_triangle(tri: &[Vec3; 3], ray: &Ray, t_max: f32) -> Option<f32> {
-        let e1 = tri[1] - tri[0];
-        let e2 = tri[2] - tri[0];
-        let p = ray.direction.cross(e2);
-        let det = e1.dot(p);
-        if det == 0.0 {
-            return None;
-        }
-        let inv_det = 1.0 / det;
-        let s = ray.origin - tri[0];
-        let u = s.dot(p) * inv_det;
-        if !(0.0..=1.0).contains(&u) {
-            return None;
-        }
-        let q = s.cross(e1);
-        let v = ray.direction.dot(q) * inv_det;
-        if v < 0.0 || u + v > 1.0 {
-            return None;
-        }
-        let t = e2.dot(q) * inv_det;
-        (t > 0.0 && t < t_max).then_some(t)
+        crate::shape::Triangle::new(tri[0], tri[1], tri[2]).intersect(ray, t_max)
     }
 
     fn triangle_bounds(tris: &[[Vec3; 3]]) -> Vec<Aabb> {

@@ -7,8 +7,10 @@ use math::Vec2;
 use math::Vec3;
 use render::driver::{Budget, Renderer};
 use render::{Algorithm, RenderSettings};
+use scene::light::AreaLight;
 use scene::shape::{Shape, Triangle};
-use scene::{Bsdf, Scene, TransportMode};
+use scene::{Bsdf, Camera, Light, Material, Primitive, Scene, TransportMode};
+use spectrum::Rgb;
 use testkit::MeanVar;
 
 /// Block means over iterations, per block and channel (`(block * 3 + channel)`), with their
@@ -184,4 +186,34 @@ pub fn select(
         }
     }
     (means, errors)
+}
+
+/// A closed cube `[-1, 1]³` whose inner faces all emit `emission` and reflect diffusely with
+/// `albedo`, seen from inside by a `resolution²` camera.
+pub fn furnace(emission: f32, albedo: f32, resolution: u32) -> Scene {
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let corners = [
+        c(-1., -1., -1.),
+        c(1., -1., -1.),
+        c(1., 1., -1.),
+        c(-1., 1., -1.),
+        c(-1., -1., 1.),
+        c(1., -1., 1.),
+        c(1., 1., 1.),
+        c(-1., 1., 1.),
+    ];
+    // Faces as corner quadruples, wound so that normals point into the cube.
+    let faces = [[0, 1, 2, 3], [4, 7, 6, 5], [0, 4, 5, 1], [3, 2, 6, 7], [0, 3, 7, 4], [1, 5, 6, 2]];
+    let mut primitives = Vec::new();
+    let mut lights = Vec::new();
+    for f in faces {
+        for tri in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+            let t = Triangle::new(corners[tri[0]], corners[tri[1]], corners[tri[2]]);
+            assert!(t.normal.dot(-t.p0) > 0.0, "normals point inwards");
+            primitives.push(Primitive { shape: Shape::Triangle(t), material: 0, light: Some(lights.len() as u32) });
+            lights.push(Light::Area(AreaLight::new(t, Rgb::splat(emission))));
+        }
+    }
+    let camera = Camera::new(c(0.2, -0.3, 0.1), c(0.3, 1.0, 0.2), Vec3::Z, 90.0, resolution, resolution);
+    Scene::new("furnace", primitives, vec![Material::diffuse(Rgb::splat(albedo))], lights, camera)
 }
