@@ -191,6 +191,11 @@ pub fn select(
 /// A closed cube `[-1, 1]³` whose inner faces all emit `emission` and reflect diffusely with
 /// `albedo`, seen from inside by a `resolution²` camera.
 pub fn furnace(emission: f32, albedo: f32, resolution: u32) -> Scene {
+    furnace_with(emission, Material::diffuse(Rgb::splat(albedo)), resolution)
+}
+
+/// The furnace cube with every face made of `material`.
+pub fn furnace_with(emission: f32, material: Material, resolution: u32) -> Scene {
     let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
     let corners = [
         c(-1., -1., -1.),
@@ -215,5 +220,5 @@ pub fn furnace(emission: f32, albedo: f32, resolution: u32) -> Scene {
         }
     }
     let camera = Camera::new(c(0.2, -0.3, 0.1), c(0.3, 1.0, 0.2), Vec3::Z, 90.0, resolution, resolution);
-    Scene::new("furnace", primitives, vec![Material::diffuse(Rgb::splat(albedo))], lights, camera)
+    Scene::new("furnace", primitives, vec![material], lights, camera)
 }
