@@ -8,10 +8,14 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use render::driver::Budget;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use render::driver::{Budget, Control};
 use render::vcm::RadiusMode;
 use render::{Algorithm, RenderSettings};
 use scene::Scene;
+
+mod checkpoint;
 use scene::cornell::{self, BUILTIN_SCENES};
 
 #[derive(Parser)]
@@ -118,6 +122,18 @@ struct RenderArgs {
     /// Do not draw a progress bar.
     #[arg(long)]
     quiet: bool,
+    /// Save the render's state to FILE (atomically) every --checkpoint-every seconds and at
+    /// the end, so that `--resume FILE` can continue it.
+    #[arg(long, value_name = "FILE")]
+    checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints (0: after every iteration).
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
+    checkpoint_every: f64,
+    /// Continue the render saved in FILE: scene, algorithm, resolution, seed, path length and
+    /// radius settings come from the checkpoint (those options are ignored); --iterations
+    /// counts the checkpoint's iterations too. Keeps checkpointing to FILE.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -197,7 +213,33 @@ fn check_writable(path: &Path) -> Result<()> {
     Ok(())
 }
 
-fn run_render(args: RenderArgs) -> Result<()> {
+/// Set by the first Ctrl-C / SIGTERM: finish the current iteration, write the images, stop.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+fn run_render(mut args: RenderArgs) -> Result<()> {
+    // A resumed render takes its settings from the checkpoint.
+    let resumed = match &args.resume {
+        Some(path) => {
+            let (recorded, film) = checkpoint::load(path)?;
+            args.scene_mask = Some(recorded.mask);
+            args.algorithm = AlgorithmName::from_str(&recorded.algorithm, false)
+                .map_err(|_| anyhow::anyhow!("unknown algorithm '{}' in '{}'", recorded.algorithm, path.display()))?;
+            args.resolution = recorded.resolution;
+            args.max_length = recorded.max_length;
+            args.seed = recorded.seed;
+            args.radius_factor = recorded.radius_factor;
+            args.radius_alpha = recorded.radius_alpha;
+            args.radius_mode = RadiusModeName::from_str(&recorded.radius_mode, false).map_err(|_| {
+                anyhow::anyhow!("unknown radius mode '{}' in '{}'", recorded.radius_mode, path.display())
+            })?;
+            args.memory_efficient = recorded.memory_efficient;
+            if args.checkpoint.is_none() {
+                args.checkpoint = Some(path.clone());
+            }
+            Some(film)
+        }
+        None => None,
+    };
     let algorithm = args.algorithm.algorithm();
     if !(args.radius_factor.is_finite() && args.radius_factor > 0.0) {
         bail!("--radius-factor must be a positive number, got {}", args.radius_factor);
@@ -212,6 +254,9 @@ fn run_render(args: RenderArgs) -> Result<()> {
     if args.max_length == 0 {
         bail!("--max-length must be at least 1");
     }
+    if !(args.checkpoint_every.is_finite() && args.checkpoint_every >= 0.0) {
+        bail!("--checkpoint-every must be a non-negative number of seconds, got {}", args.checkpoint_every);
+    }
     let budget = match (args.iterations, args.time) {
         (_, Some(t)) if !(t.is_finite() && t > 0.0) => bail!("--time must be a positive number of seconds, got {t}"),
         (_, Some(t)) => Budget::Time(Duration::from_secs_f64(t)),
@@ -221,6 +266,9 @@ fn run_render(args: RenderArgs) -> Result<()> {
     };
     let outputs = output_paths(&args.output)?;
     for (path, _) in &outputs {
+        check_writable(path)?;
+    }
+    if let Some(path) = &args.checkpoint {
         check_writable(path)?;
     }
     let scene = build_scene(mask, args.resolution)?;
@@ -239,7 +287,42 @@ fn run_render(args: RenderArgs) -> Result<()> {
         },
         memory_efficient: args.memory_efficient,
     };
-    let result = render::render(&scene, &settings).map_err(anyhow::Error::msg)?;
+    let recorded = checkpoint::Recorded {
+        mask,
+        algorithm: algorithm.name().to_string(),
+        resolution: args.resolution,
+        max_length: args.max_length,
+        seed: args.seed,
+        radius_factor: args.radius_factor,
+        radius_alpha: args.radius_alpha,
+        radius_mode: args.radius_mode.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default(),
+        memory_efficient: args.memory_efficient,
+    };
+    // First Ctrl-C / SIGTERM: stop after the current iteration; a second one: exit at once.
+    let handler = ctrlc::set_handler(|| {
+        if STOP.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupted: finishing the current iteration (press Ctrl-C again to quit at once)");
+    });
+    if let Err(error) = handler {
+        eprintln!("warning: cannot install the Ctrl-C handler ({error}); an interrupt will lose the render");
+    }
+    let resumed_iterations = resumed.as_ref().map(|f| f.iterations());
+    let checkpoint_path = args.checkpoint.clone();
+    let save = move |film: &scene::Film| {
+        checkpoint::save(checkpoint_path.as_deref().expect("only set with a path"), &recorded, film)
+            .map_err(|e| format!("{e:#}"))
+    };
+    let control = Control {
+        resume: resumed,
+        stop: Some(&STOP),
+        checkpoint: args
+            .checkpoint
+            .as_ref()
+            .map(|_| (Duration::from_secs_f64(args.checkpoint_every), Box::new(save) as Box<dyn FnMut(&_) -> _>)),
+    };
+    let result = render::driver::render_with(&scene, &settings, control).map_err(anyhow::Error::msg)?;
     let film = &result.film;
     let image = io::Image { width: film.width() as usize, height: film.height() as usize, pixels: film.mean() };
     let options = io::WriteOptions { exposure_stops: args.exposure };
@@ -248,20 +331,29 @@ fn run_render(args: RenderArgs) -> Result<()> {
     }
     let seconds = result.elapsed.as_secs_f64();
     let iterations = film.iterations();
-    let names: Vec<String> = outputs.iter().map(|(p, _)| p.display().to_string()).collect();
+    let here = iterations - resumed_iterations.unwrap_or(0);
+    let mut names: Vec<String> = outputs.iter().map(|(p, _)| p.display().to_string()).collect();
+    if let Some(path) = &args.checkpoint {
+        names.push(format!("checkpoint {}", path.display()));
+    }
     let vertices = match result.light_vertices {
         Some((count, bytes)) => format!(", {count} light vertices x {bytes} B"),
         None => String::new(),
     };
+    let resumed_note = match resumed_iterations {
+        Some(n) => format!(" (resumed after {n})"),
+        None => String::new(),
+    };
+    let interrupted_note = if result.interrupted { "interrupted: " } else { "" };
     eprintln!(
-        "{} with {} at {}x{}: {} iterations in {:.2} s ({:.1} ms/iteration, {} threads{vertices}), {} rejected samples -> {}",
+        "{interrupted_note}{} with {} at {}x{}: {} iterations{resumed_note} in {:.2} s ({:.1} ms/iteration, {} threads{vertices}), {} rejected samples -> {}",
         scene.name,
         algorithm.name(),
         film.width(),
         film.height(),
         iterations,
         seconds,
-        1e3 * seconds / iterations.max(1) as f64,
+        1e3 * seconds / here.max(1) as f64,
         result.threads,
         film.rejected_samples(),
         names.join(", ")

@@ -76,3 +76,84 @@ fn bad_input_fails_clearly() {
     assert_fails(&["render", "--time", "0", "-o", out], &["--time must be a positive number"]);
     assert!(!std::path::Path::new(out).exists(), "nothing was written");
 }
+
+/// The iteration count recorded in a checkpoint file.
+fn checkpoint_iterations(path: &std::path::Path) -> Option<u64> {
+    let bytes = std::fs::read(path).ok()?;
+    let text = String::from_utf8_lossy(&bytes[..bytes.len().min(400)]).into_owned();
+    text.lines().find_map(|l| l.strip_prefix("iterations=")).and_then(|v| v.parse().ok())
+}
+
+#[test]
+fn sigint_then_resume_equals_an_uninterrupted_render() {
+    let dir = temp_dir("sigint");
+    let checkpoint = dir.join("render.ckpt");
+    let interrupted = dir.join("interrupted.pfm");
+    let common = ["--scene", "1", "-a", "vcm", "-r", "48x40", "--seed", "3", "--quiet"];
+    let child = Command::new(env!("CARGO_BIN_EXE_vcm"))
+        .args(["render", "-i", "1000000", "--checkpoint-every", "0"])
+        .args(common)
+        .arg("--checkpoint")
+        .arg(&checkpoint)
+        .arg("-o")
+        .arg(&interrupted)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait for a few iterations to be checkpointed, then interrupt.
+    let start = std::time::Instant::now();
+    while checkpoint_iterations(&checkpoint).unwrap_or(0) < 3 {
+        assert!(start.elapsed().as_secs() < 60, "no checkpoint written");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+    let output = child.wait_with_output().unwrap();
+    let message = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "an interrupted render exits cleanly: {message}");
+    assert!(message.contains("interrupted"), "{message}");
+    let done = checkpoint_iterations(&checkpoint).unwrap();
+    let partial = io::read_image(&interrupted).unwrap();
+    assert_eq!((partial.width, partial.height), (48, 40), "the image is written on interrupt");
+
+    // Resume to done + 2 iterations, and render the same uninterrupted.
+    let total = (done + 2).to_string();
+    let resumed = dir.join("resumed.pfm");
+    let output = vcm(&[
+        "render",
+        "--resume",
+        checkpoint.to_str().unwrap(),
+        "-i",
+        &total,
+        "--quiet",
+        "-o",
+        resumed.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let straight = dir.join("straight.pfm");
+    let mut args = vec!["render", "-i", &total, "-o", straight.to_str().unwrap()];
+    args.extend(common);
+    let output = vcm(&args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let (a, b) = (io::read_image(&resumed).unwrap(), io::read_image(&straight).unwrap());
+    assert!(
+        a.pixels.iter().zip(&b.pixels).all(|(p, q)| p.map(f32::to_bits) == q.map(f32::to_bits)),
+        "resumed image differs"
+    );
+}
+
+#[test]
+fn bad_checkpoints_fail_clearly() {
+    let dir = temp_dir("bad-checkpoint");
+    let path = dir.join("bad.ckpt");
+    std::fs::write(&path, b"not a checkpoint").unwrap();
+    let out = dir.join("x.exr");
+    assert_fails(
+        &["render", "--resume", path.to_str().unwrap(), "-o", out.to_str().unwrap()],
+        &["not a valid vcm checkpoint"],
+    );
+    assert_fails(
+        &["render", "--resume", "/nonexistent.ckpt", "-o", out.to_str().unwrap()],
+        &["cannot read checkpoint '/nonexistent.ckpt'"],
+    );
+}

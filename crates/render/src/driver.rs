@@ -6,6 +6,7 @@
 //! so the image does not depend on the number of threads.
 
 use std::io::IsTerminal;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -116,6 +117,8 @@ pub struct RenderOutput {
     pub light_vertices: Option<(usize, usize)>,
     /// Statistics of the last iteration of the VCM engine.
     pub vcm_stats: Option<crate::vcm::IterationStats>,
+    /// The render was stopped early through [`Control::stop`].
+    pub interrupted: bool,
 }
 
 /// The integrator of a render, with its state across iterations.
@@ -139,6 +142,11 @@ pub struct Renderer<'a> {
 impl<'a> Renderer<'a> {
     /// Prepares a render of `scene` (the budget in `settings` is not used here).
     pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Result<Self, String> {
+        Self::starting_at(scene, settings, 0)
+    }
+
+    /// Prepares a render whose next iteration is `first_iteration` (resuming a render).
+    pub fn starting_at(scene: &'a Scene, settings: &RenderSettings, first_iteration: u64) -> Result<Self, String> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(settings.threads)
             .build()
@@ -159,7 +167,7 @@ impl<'a> Renderer<'a> {
             ))),
         };
         let frame = FrameBuffer::new(scene.camera.width, scene.camera.height);
-        Ok(Self { scene, settings: settings.clone(), pool, integrator, frame, iteration: 0 })
+        Ok(Self { scene, settings: settings.clone(), pool, integrator, frame, iteration: first_iteration })
     }
 
     /// Renders the next iteration into [`Renderer::frame`]; returns the number of rejected
@@ -213,22 +221,72 @@ impl<'a> Renderer<'a> {
     }
 }
 
+/// How a progressive render can be continued, stopped and saved, beyond its settings.
+#[derive(Default)]
+pub struct Control<'a> {
+    /// Continue this film (a resumed render): its iteration count is the index of the next
+    /// iteration, so the result equals an uninterrupted render with the same settings.
+    pub resume: Option<Film>,
+    /// When set (e.g. by a Ctrl-C handler), the render finishes the current iteration and
+    /// stops.
+    pub stop: Option<&'a AtomicBool>,
+    /// Called with the film every `checkpoint_every` of wall-clock time (after the iteration
+    /// that crosses the interval) and once at the end; a returned error stops the render.
+    pub checkpoint: Option<(Duration, SaveFilm<'a>)>,
+}
+
+/// A callback that saves the film (a checkpoint); an error stops the render.
+pub type SaveFilm<'a> = Box<dyn FnMut(&Film) -> Result<(), String> + 'a>;
+
 /// Renders `scene` progressively as `settings` say.
 pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderOutput, String> {
-    let mut renderer = Renderer::new(scene, settings)?;
+    render_with(scene, settings, Control::default())
+}
+
+/// Renders `scene` progressively as `settings` say, resumable, stoppable and checkpointed as
+/// `control` says. `Budget::Iterations(n)` counts the iterations of the resumed film too;
+/// `Budget::Time` counts this call's time only.
+pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -> Result<RenderOutput, String> {
+    let Control { resume, stop, mut checkpoint } = control;
     let camera = &scene.camera;
-    let mut film = Film::new(camera.width, camera.height);
+    let mut film = match resume {
+        Some(film) if (film.width(), film.height()) != (camera.width, camera.height) => {
+            return Err(format!(
+                "the film to resume is {}x{}, the render {}x{}",
+                film.width(),
+                film.height(),
+                camera.width,
+                camera.height
+            ));
+        }
+        Some(film) => film,
+        None => Film::new(camera.width, camera.height),
+    };
+    let mut renderer = Renderer::starting_at(scene, settings, film.iterations())?;
     let progress = make_progress_bar(settings);
     let start = Instant::now();
+    let mut last_checkpoint = Instant::now();
+    let mut interrupted = false;
+    let first_iteration = renderer.iterations();
     loop {
         let iteration = renderer.iterations();
         match settings.budget {
             Budget::Iterations(n) if iteration >= n => break,
-            Budget::Time(limit) if iteration > 0 && start.elapsed() >= limit => break,
+            Budget::Time(limit) if iteration > first_iteration && start.elapsed() >= limit => break,
             _ => {}
+        }
+        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            interrupted = true;
+            break;
         }
         let rejected = renderer.step();
         film.add_iteration(renderer.frame(), rejected);
+        if let Some((every, save)) = &mut checkpoint
+            && last_checkpoint.elapsed() >= *every
+        {
+            save(&film)?;
+            last_checkpoint = Instant::now();
+        }
         if let Some(bar) = &progress {
             match settings.budget {
                 Budget::Iterations(_) => bar.set_position(iteration + 1),
@@ -242,9 +300,19 @@ pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderOutput, 
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
+    if let Some((_, save)) = &mut checkpoint {
+        save(&film)?;
+    }
     let vcm_stats = renderer.vcm_engine().map(|e| e.stats());
     let light_vertices = vcm_stats.map(|s| (s.light_vertices, s.bytes_per_vertex));
-    Ok(RenderOutput { film, elapsed: start.elapsed(), threads: renderer.threads(), light_vertices, vcm_stats })
+    Ok(RenderOutput {
+        film,
+        elapsed: start.elapsed(),
+        threads: renderer.threads(),
+        light_vertices,
+        vcm_stats,
+        interrupted,
+    })
 }
 
 fn make_progress_bar(settings: &RenderSettings) -> Option<ProgressBar> {

@@ -76,6 +76,29 @@ impl Film {
         self.rejected_samples += rejected_samples;
     }
 
+    /// The per-pixel sums of the iterations' frames (row-major), for checkpoints.
+    pub fn sums(&self) -> &[[f64; 3]] {
+        &self.sum
+    }
+
+    /// A film with the given sums and counts (a checkpoint being resumed); `None` when the
+    /// number of sums does not match the size.
+    pub fn from_sums(
+        width: u32,
+        height: u32,
+        sums: Vec<[f64; 3]>,
+        iterations: u64,
+        rejected_samples: u64,
+    ) -> Option<Self> {
+        (sums.len() == width as usize * height as usize).then_some(Self {
+            width,
+            height,
+            sum: sums,
+            iterations,
+            rejected_samples,
+        })
+    }
+
     /// The mean over iterations: the rendered image (row-major, top row first).
     pub fn mean(&self) -> Vec<[f32; 3]> {
         let scale = if self.iterations == 0 { 0.0 } else { 1.0 / self.iterations as f64 };

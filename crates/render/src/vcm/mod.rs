@@ -285,6 +285,8 @@ pub struct VcmEngine {
     /// Per-pixel contributions by family of the last iteration, when requested.
     family_frames: Option<Vec<FamilyValues>>,
     stats: IterationStats,
+    /// The memory-efficient mode has light vertices to merge with.
+    merge_seeded: bool,
 }
 
 /// One chunk of light sub-paths: vertices, per-path ends (relative), splats.
@@ -311,6 +313,7 @@ impl VcmEngine {
             grid: HashGrid::new(),
             family_frames: None,
             stats: IterationStats::default(),
+            merge_seeded: false,
         }
     }
 
@@ -430,14 +433,19 @@ impl VcmEngine {
         frame: &mut FrameBuffer,
     ) -> (u64, usize) {
         let pixel_count = frame.pixels.len();
-        if it.techniques.merge && iteration == 0 {
-            // Seed merging with an extra set of light sub-paths, used only for merging.
-            let chunks = trace_light_chunks(scene, seed, SEED_ITERATION, it, pixel_count);
+        if it.techniques.merge && !self.merge_seeded {
+            // Merging uses the previous iteration's light vertices. The first iteration of a
+            // render merges with an extra set of light sub-paths; a resumed render re-traces
+            // those of the iteration before it (the same random streams, so the same vertices
+            // as in an uninterrupted render).
+            let source = if iteration == 0 { SEED_ITERATION } else { iteration - 1 };
+            let chunks = trace_light_chunks(scene, seed, source, it, pixel_count);
             self.store.clear();
             for (vertices, _, _) in &chunks {
                 self.store.vertices.extend_from_slice(vertices);
             }
             self.build_merge_grid(it.radius);
+            self.merge_seeded = true;
         }
         // Every row traces its pixels' light sub-paths and camera paths; rows return their
         // light vertices (for the next iteration's merging) and splats.
