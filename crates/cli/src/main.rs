@@ -11,7 +11,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use render::driver::{Budget, Control};
-use render::vcm::RadiusMode;
+use render::vcm::{Family, RadiusMode};
 use render::{Algorithm, RenderSettings};
 use scene::Scene;
 
@@ -129,6 +129,12 @@ struct RenderArgs {
     /// Seconds between checkpoints (0: after every iteration).
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
     checkpoint_every: f64,
+    /// Write one linear image per technique family (emitter-hit, next-event, light-tracing,
+    /// connection, merging; they sum to the image) and a false-colour `vc-vm-share.png`
+    /// (red: share of vertex connection, green: share of vertex merging) into DIR. VCM engine
+    /// algorithms only.
+    #[arg(long, value_name = "DIR")]
+    techniques: Option<PathBuf>,
     /// Continue the render saved in FILE: scene, algorithm, resolution, seed, path length and
     /// radius settings come from the checkpoint (those options are ignored); --iterations
     /// counts the checkpoint's iterations too. Keeps checkpointing to FILE.
@@ -271,6 +277,19 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
     if let Some(path) = &args.checkpoint {
         check_writable(path)?;
     }
+    if let Some(dir) = &args.techniques {
+        if !matches!(algorithm, Algorithm::Vcm(_)) {
+            bail!(
+                "--techniques needs an algorithm of the VCM engine (lt, ppm, bpm, bpt, vcm), not {}",
+                algorithm.name()
+            );
+        }
+        if resumed.is_some() {
+            bail!("--techniques cannot be combined with --resume (checkpoints do not keep the technique images)");
+        }
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create technique directory '{}'", dir.display()))?;
+    }
     let scene = build_scene(mask, args.resolution)?;
     let settings = RenderSettings {
         algorithm,
@@ -321,6 +340,7 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
             .checkpoint
             .as_ref()
             .map(|_| (Duration::from_secs_f64(args.checkpoint_every), Box::new(save) as Box<dyn FnMut(&_) -> _>)),
+        record_families: args.techniques.is_some(),
     };
     let result = render::driver::render_with(&scene, &settings, control).map_err(anyhow::Error::msg)?;
     let film = &result.film;
@@ -328,6 +348,9 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
     let options = io::WriteOptions { exposure_stops: args.exposure };
     for (path, _) in &outputs {
         io::write_image(path, &image, &options)?;
+    }
+    if let (Some(dir), Some(families)) = (&args.techniques, &result.family_films) {
+        write_technique_images(dir, families, &options)?;
     }
     let seconds = result.elapsed.as_secs_f64();
     let iterations = film.iterations();
@@ -358,6 +381,28 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
         film.rejected_samples(),
         names.join(", ")
     );
+    Ok(())
+}
+
+/// Writes the per-family images and the false-colour VC/VM share image into `dir`.
+fn write_technique_images(dir: &Path, families: &[scene::Film; 5], options: &io::WriteOptions) -> Result<()> {
+    let means: Vec<Vec<[f32; 3]>> = families.iter().map(|f| f.mean()).collect();
+    let (width, height) = (families[0].width() as usize, families[0].height() as usize);
+    for (family, pixels) in Family::ALL.iter().zip(&means) {
+        let image = io::Image { width, height, pixels: pixels.clone() };
+        io::write_image(&dir.join(format!("{}.exr", family.name())), &image, options)?;
+    }
+    // Share of vertex merging against all connection techniques, by luminance.
+    let luminance = |p: [f32; 3]| spectrum::Rgb::from_array(p).luminance().max(0.0);
+    let share = (0..width * height)
+        .map(|i| {
+            let merging = luminance(means[Family::Merging as usize][i]);
+            let total: f32 = means.iter().map(|m| luminance(m[i])).sum();
+            if total > 0.0 { [1.0 - merging / total, merging / total, 0.0] } else { [0.0; 3] }
+        })
+        .collect();
+    let image = io::Image { width, height, pixels: share };
+    io::write_image(&dir.join("vc-vm-share.png"), &image, &io::WriteOptions::default())?;
     Ok(())
 }
 

@@ -157,3 +157,49 @@ fn bad_checkpoints_fail_clearly() {
         &["cannot read checkpoint '/nonexistent.ckpt'"],
     );
 }
+
+#[test]
+fn technique_images_sum_to_the_image() {
+    for scene in ["0", "3"] {
+        let dir = temp_dir(&format!("techniques-{scene}"));
+        let out = dir.join("image.exr");
+        let techniques = dir.join("techniques");
+        let output = vcm(&[
+            "render",
+            "--scene",
+            scene,
+            "-i",
+            "3",
+            "-r",
+            "40x32",
+            "--quiet",
+            "-o",
+            out.to_str().unwrap(),
+            "--techniques",
+            techniques.to_str().unwrap(),
+        ]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let image = io::read_image(&out).unwrap();
+        let mut sum = vec![[0.0f64; 3]; image.pixels.len()];
+        for family in ["emitter-hit", "next-event", "light-tracing", "connection", "merging"] {
+            let part = io::read_image(&techniques.join(format!("{family}.exr"))).unwrap();
+            for (s, p) in sum.iter_mut().zip(&part.pixels) {
+                for c in 0..3 {
+                    s[c] += p[c] as f64;
+                }
+            }
+        }
+        for (s, p) in sum.iter().zip(&image.pixels) {
+            for c in 0..3 {
+                let tolerance = 1e-5 * (p[c].abs() as f64).max(1e-3);
+                assert!((s[c] - p[c] as f64).abs() <= tolerance, "scene {scene}: families sum to {} vs {}", s[c], p[c]);
+            }
+        }
+        assert!(techniques.join("vc-vm-share.png").exists());
+    }
+    let out = temp_dir("techniques-pt").join("x.exr");
+    assert_fails(
+        &["render", "-a", "pt", "-i", "1", "-o", out.to_str().unwrap(), "--techniques", "/tmp/t"],
+        &["--techniques needs"],
+    );
+}

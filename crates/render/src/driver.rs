@@ -17,7 +17,7 @@ use spectrum::Rgb;
 
 use crate::eye_light;
 use crate::path_tracer::PathTracer;
-use crate::vcm::{RadiusMode, VcmAlgorithm, VcmEngine, VcmSettings};
+use crate::vcm::{Family, RadiusMode, VcmAlgorithm, VcmEngine, VcmSettings};
 
 /// The rendering algorithms. The names are the command-line spellings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -119,6 +119,9 @@ pub struct RenderOutput {
     pub vcm_stats: Option<crate::vcm::IterationStats>,
     /// The render was stopped early through [`Control::stop`].
     pub interrupted: bool,
+    /// Per technique family ([`Family::ALL`] order), when [`Control::record_families`] was set
+    /// and the algorithm is one of the VCM engine's.
+    pub family_films: Option<[Film; 5]>,
 }
 
 /// The integrator of a render, with its state across iterations.
@@ -233,6 +236,10 @@ pub struct Control<'a> {
     /// Called with the film every `checkpoint_every` of wall-clock time (after the iteration
     /// that crosses the interval) and once at the end; a returned error stops the render.
     pub checkpoint: Option<(Duration, SaveFilm<'a>)>,
+    /// Accumulate one film per technique family of the VCM engine ([`Family`]), returned in
+    /// [`RenderOutput::family_films`]; they sum to the film. Ignored by the other integrators
+    /// and when resuming (the families of earlier iterations are not in a checkpoint).
+    pub record_families: bool,
 }
 
 /// A callback that saves the film (a checkpoint); an error stops the render.
@@ -247,7 +254,7 @@ pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderOutput, 
 /// `control` says. `Budget::Iterations(n)` counts the iterations of the resumed film too;
 /// `Budget::Time` counts this call's time only.
 pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -> Result<RenderOutput, String> {
-    let Control { resume, stop, mut checkpoint } = control;
+    let Control { resume, stop, mut checkpoint, record_families } = control;
     let camera = &scene.camera;
     let mut film = match resume {
         Some(film) if (film.width(), film.height()) != (camera.width, camera.height) => {
@@ -263,6 +270,14 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
         None => Film::new(camera.width, camera.height),
     };
     let mut renderer = Renderer::starting_at(scene, settings, film.iterations())?;
+    let mut family_films = match renderer.vcm_engine_mut() {
+        Some(engine) if record_families && film.iterations() == 0 => {
+            engine.record_families(true);
+            Some(Family::ALL.map(|_| Film::new(camera.width, camera.height)))
+        }
+        _ => None,
+    };
+    let mut family_frame = FrameBuffer::new(camera.width, camera.height);
     let progress = make_progress_bar(settings);
     let start = Instant::now();
     let mut last_checkpoint = Instant::now();
@@ -281,6 +296,15 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
         }
         let rejected = renderer.step();
         film.add_iteration(renderer.frame(), rejected);
+        if let (Some(films), Some(values)) = (&mut family_films, renderer.vcm_engine().and_then(|e| e.family_frames()))
+        {
+            for (index, family_film) in films.iter_mut().enumerate() {
+                for (pixel, value) in family_frame.pixels.iter_mut().zip(values) {
+                    *pixel = value.0[index];
+                }
+                family_film.add_iteration(&family_frame, 0);
+            }
+        }
         if let Some((every, save)) = &mut checkpoint
             && last_checkpoint.elapsed() >= *every
         {
@@ -312,6 +336,7 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
         light_vertices,
         vcm_stats,
         interrupted,
+        family_films,
     })
 }
 
