@@ -16,6 +16,7 @@ use render::{Algorithm, RenderSettings};
 use scene::Scene;
 
 mod checkpoint;
+mod compare;
 use scene::cornell::{self, BUILTIN_SCENES};
 
 #[derive(Parser)]
@@ -31,8 +32,10 @@ enum Command {
     Render(RenderArgs),
     /// List the built-in scenes.
     Scenes,
-    /// Time iterations of an algorithm on the four reference scenes.
+    /// Time iterations of the algorithms on the reference scenes.
     Bench(BenchArgs),
+    /// Compare two images (RMSE, relative MSE, means, optional per-pixel Z-test).
+    Compare(compare::CompareArgs),
 }
 
 /// Algorithm names as the command line spells them.
@@ -485,18 +488,19 @@ fn process_cpu_seconds() -> Option<f64> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Render(args) => run_render(args),
+        Command::Render(args) => run_render(args).map(|()| ExitCode::SUCCESS),
         Command::Scenes => {
             run_scenes();
-            Ok(())
+            Ok(ExitCode::SUCCESS)
         }
-        Command::Bench(args) => run_bench(args),
+        Command::Bench(args) => run_bench(args).map(|()| ExitCode::SUCCESS),
+        Command::Compare(args) => compare::run(args),
     };
     match outcome {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(error) => {
             eprintln!("error: {error:#}");
-            ExitCode::FAILURE
+            ExitCode::from(2)
         }
     }
 }

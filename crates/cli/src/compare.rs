@@ -1,0 +1,579 @@
+//! `vcm compare A B`: error metrics between a test image `A` and a reference image `B`.
+//!
+//! Both images are read with [`io::read_image`] (EXR, PFM, HDR or PNG by extension) and must have
+//! the same size. With `N` the number of compared pixels and the sums running over those pixels
+//! and their three channels (`3N` entries), values taken in `f64`:
+//!
+//! - **RMSE** = `sqrt(Σ (a − b)² / 3N)`.
+//! - **relative MSE** = `Σ (a − b)² / (b² + ε) / 3N` with `ε = 1e-2` ([`RELATIVE_MSE_EPSILON`]):
+//!   the usual rMSE of rendering papers, where `ε` keeps near-black reference pixels from
+//!   dominating.
+//! - **MAE** (mean absolute error) = `Σ |a − b| / 3N`.
+//! - **means**: the per-channel means of `A` and `B` over the compared pixels, their difference
+//!   `A − B` and the relative difference `(A − B) / B` in percent.
+//!
+//! A pixel with a non-finite value (NaN or ±∞) in any channel of either image — or of either
+//! variance image, when given — is excluded from every metric; such pixels are counted and
+//! reported. It is an error when no pixel is left.
+//!
+//! **Per-pixel Z-test** (only when both `--variance-a` and `--variance-b` are given: images of
+//! the same size holding the variance of the per-pixel mean estimate of each channel). For every
+//! compared entry, `z = (a − b) / sqrt(var_a + var_b)` (negative variances are treated as 0; a
+//! zero combined variance gives `z = 0` when `a == b` and `±∞` otherwise) and the two-sided
+//! p-value `p = erfc(|z| / √2)`. An entry fails when `p` is below the Šidák-corrected level
+//! `1 − (1 − α)^(1/3N)`, which keeps the family-wise false-alarm rate at `α` over all `3N`
+//! entries; the test passes when no entry fails.
+//!
+//! **Exit code**: 0 normally; 1 when `--threshold` is given and the relative MSE exceeds it, or
+//! when the Z-test fails. Errors (unreadable files, size mismatches, bad options) are returned
+//! to the caller.
+//!
+//! **Difference image** (`--diff FILE`): for every pixel the signed difference `d` of the
+//! channel means of `A` and `B`; red where `d > 0` (A brighter), blue where `d < 0`, with
+//! linear intensity `|d| / s` clamped to 1, where `s` is the 99th percentile (nearest rank) of
+//! `|d|` over the compared pixels. Excluded (non-finite) pixels are green.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result, bail, ensure};
+
+/// The `ε` in the relative MSE's denominator `b² + ε`.
+pub const RELATIVE_MSE_EPSILON: f64 = 1e-2;
+
+/// Channel names, in storage order.
+const CHANNELS: [&str; 3] = ["R", "G", "B"];
+
+/// Arguments of `vcm compare`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CompareArgs {
+    /// Test image.
+    pub a: PathBuf,
+    /// Reference image.
+    pub b: PathBuf,
+    /// Per-pixel variance of the mean of A (an image of the same size, e.g. written by
+    /// `render --variance`, future); with --variance-b, enables the per-pixel Z-test.
+    #[arg(long, value_name = "FILE", requires = "variance_b")]
+    pub variance_a: Option<PathBuf>,
+    /// Per-pixel variance of the mean of B.
+    #[arg(long, value_name = "FILE", requires = "variance_a")]
+    pub variance_b: Option<PathBuf>,
+    /// Family-wise significance of the per-pixel Z-test (Šidák-corrected over all pixel channels).
+    #[arg(long, default_value_t = 1e-3)]
+    pub alpha: f64,
+    /// Fail (exit code 1) when the relative MSE exceeds this.
+    #[arg(long)]
+    pub threshold: Option<f64>,
+    /// Write a false-colour difference image (PNG/EXR by extension): blue where A < B, red where
+    /// A > B, scaled so that |A−B| = the 99th percentile of |A−B| is full intensity.
+    #[arg(long, value_name = "FILE")]
+    pub diff: Option<PathBuf>,
+}
+
+/// The metrics of a comparison (see the module documentation for the definitions).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Metrics {
+    /// Number of compared pixels (non-finite ones excluded).
+    pub pixels: usize,
+    /// Root-mean-square error over all compared pixel channels.
+    pub rmse: f64,
+    /// Mean of `(a − b)² / (b² + 1e-2)` over all compared pixel channels.
+    pub relative_mse: f64,
+    /// Mean of `|a − b|` over all compared pixel channels.
+    pub mean_absolute_error: f64,
+    /// Per-channel means of A over the compared pixels.
+    pub means_a: [f64; 3],
+    /// Per-channel means of B over the compared pixels.
+    pub means_b: [f64; 3],
+    /// Number of pixels excluded because a channel of an input is NaN or infinite.
+    pub non_finite: usize,
+    /// The per-pixel Z-test, when variances were given.
+    pub z_test: Option<ZTest>,
+}
+
+/// The outcome of the per-pixel Z-test.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ZTest {
+    /// Number of tested entries (compared pixels × 3 channels).
+    pub entries: usize,
+    /// Signed z score `(a − b) / sqrt(var_a + var_b)` of the entry with the largest `|z|`.
+    pub worst_z: f64,
+    /// Pixel `(x, y)` of the worst entry (row 0 at the top).
+    pub worst_pixel: (usize, usize),
+    /// Channel (0 = R, 1 = G, 2 = B) of the worst entry.
+    pub worst_channel: usize,
+    /// Šidák-corrected per-entry significance level: an entry fails when its p-value is below.
+    pub threshold_p: f64,
+    /// Number of failing entries.
+    pub failing: usize,
+    /// Whether no entry failed.
+    pub passed: bool,
+}
+
+/// Computes the metrics of test image `a` against reference `b`, with the per-pixel Z-test at
+/// family-wise level `alpha` when `variance` (of A, of B) is given.
+///
+/// Errors if the sizes differ, an image's pixel buffer does not match its size, `alpha` is not
+/// in (0, 1) while variances are given, or no pixel is finite in every input.
+pub fn metrics(
+    a: &io::Image,
+    b: &io::Image,
+    variance: Option<(&io::Image, &io::Image)>,
+    alpha: f64,
+) -> Result<Metrics> {
+    check_shape("A", a)?;
+    check_shape("B", b)?;
+    ensure!(
+        (a.width, a.height) == (b.width, b.height),
+        "image sizes differ: A is {}x{}, B is {}x{}",
+        a.width,
+        a.height,
+        b.width,
+        b.height
+    );
+    if let Some((va, vb)) = variance {
+        for (name, v) in [("variance of A", va), ("variance of B", vb)] {
+            check_shape(name, v)?;
+            ensure!(
+                (v.width, v.height) == (a.width, a.height),
+                "image sizes differ: the {name} is {}x{}, the images are {}x{}",
+                v.width,
+                v.height,
+                a.width,
+                a.height
+            );
+        }
+        ensure!(alpha > 0.0 && alpha < 1.0, "the Z-test significance alpha must be in (0, 1), got {alpha}");
+    }
+
+    let mut pixels = 0usize;
+    let mut non_finite = 0usize;
+    let mut squared = 0.0f64;
+    let mut relative = 0.0f64;
+    let mut absolute = 0.0f64;
+    let mut sum_a = [0.0f64; 3];
+    let mut sum_b = [0.0f64; 3];
+    // (|z|, signed z, pixel index, channel) of the worst entry, and the |z| of every entry.
+    let mut worst: Option<(f64, f64, usize, usize)> = None;
+    let mut abs_z = Vec::new();
+    for (index, (pa, pb)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+        let vars = variance.map(|(va, vb)| (va.pixels[index], vb.pixels[index]));
+        let finite = |p: &[f32; 3]| p.iter().all(|v| v.is_finite());
+        if !(finite(pa) && finite(pb) && vars.is_none_or(|(va, vb)| finite(&va) && finite(&vb))) {
+            non_finite += 1;
+            continue;
+        }
+        pixels += 1;
+        for c in 0..3 {
+            let (x, y) = (f64::from(pa[c]), f64::from(pb[c]));
+            let d = x - y;
+            squared += d * d;
+            relative += d * d / (y * y + RELATIVE_MSE_EPSILON);
+            absolute += d.abs();
+            sum_a[c] += x;
+            sum_b[c] += y;
+            if let Some((va, vb)) = vars {
+                let se = (f64::from(va[c]).max(0.0) + f64::from(vb[c]).max(0.0)).sqrt();
+                let z = if d == 0.0 { 0.0 } else { d / se };
+                abs_z.push(z.abs());
+                if worst.is_none_or(|(w, ..)| z.abs() > w) {
+                    worst = Some((z.abs(), z, index, c));
+                }
+            }
+        }
+    }
+    if pixels == 0 {
+        bail!("no pixel to compare: all {non_finite} pixels have a non-finite value");
+    }
+    let entries = 3 * pixels;
+    let n = entries as f64;
+    let z_test = worst.map(|(_, worst_z, index, channel)| {
+        let threshold_p = sidak(alpha, entries);
+        let failing = abs_z.iter().filter(|&&z| two_sided_p(z) < threshold_p).count();
+        ZTest {
+            entries,
+            worst_z,
+            worst_pixel: (index % a.width, index / a.width),
+            worst_channel: channel,
+            threshold_p,
+            failing,
+            passed: failing == 0,
+        }
+    });
+    Ok(Metrics {
+        pixels,
+        rmse: (squared / n).sqrt(),
+        relative_mse: relative / n,
+        mean_absolute_error: absolute / n,
+        means_a: sum_a.map(|s| s / pixels as f64),
+        means_b: sum_b.map(|s| s / pixels as f64),
+        non_finite,
+        z_test,
+    })
+}
+
+/// Runs `vcm compare`: prints the metrics table on stdout and returns exit code 1 when the
+/// `--threshold` is exceeded or the Z-test fails, 0 otherwise.
+pub fn run(args: CompareArgs) -> Result<ExitCode> {
+    if let Some(t) = args.threshold {
+        ensure!(t.is_finite() && t >= 0.0, "--threshold must be a non-negative number, got {t}");
+    }
+    ensure!(args.alpha > 0.0 && args.alpha < 1.0, "--alpha must be in (0, 1), got {}", args.alpha);
+    let a = io::read_image(&args.a)?;
+    let b = io::read_image(&args.b)?;
+    check_same_size(&args.a, &a, &args.b, &b)?;
+    let variances = match (&args.variance_a, &args.variance_b) {
+        (Some(path_a), Some(path_b)) => {
+            let va = io::read_image(path_a)?;
+            check_same_size(path_a, &va, &args.a, &a)?;
+            let vb = io::read_image(path_b)?;
+            check_same_size(path_b, &vb, &args.b, &b)?;
+            Some((va, vb))
+        }
+        (None, None) => None,
+        _ => bail!("the Z-test needs both --variance-a and --variance-b"),
+    };
+    let m = metrics(&a, &b, variances.as_ref().map(|(va, vb)| (va, vb)), args.alpha)
+        .with_context(|| format!("cannot compare '{}' with '{}'", args.a.display(), args.b.display()))?;
+
+    let mut failed = false;
+    let mut text = report(&args.a, &args.b, (a.width, a.height), &m, args.alpha);
+    if let Some(threshold) = args.threshold {
+        let pass = m.relative_mse <= threshold;
+        failed |= !pass;
+        let verdict = if pass { "PASSED" } else { "FAILED" };
+        let relation = if pass { "<=" } else { ">" };
+        let _ = writeln!(
+            text,
+            "threshold: relative MSE {} {relation} {}: {verdict}",
+            number(m.relative_mse),
+            number(threshold)
+        );
+    }
+    if let Some(z) = &m.z_test {
+        failed |= !z.passed;
+    }
+    if let Some(path) = &args.diff {
+        let image = diff_image(&a, &b, variances.as_ref().map(|(va, vb)| (va, vb)));
+        io::write_image(path, &image, &io::WriteOptions::default())?;
+        let _ = writeln!(text, "difference image written to '{}'", path.display());
+    }
+    print!("{text}");
+    Ok(if failed { ExitCode::from(1) } else { ExitCode::SUCCESS })
+}
+
+/// The human-readable table printed by [`run`] (without the threshold line).
+fn report(path_a: &Path, path_b: &Path, (width, height): (usize, usize), m: &Metrics, alpha: f64) -> String {
+    let mut t = String::new();
+    let _ = writeln!(t, "test (A):       {}", path_a.display());
+    let _ = writeln!(t, "reference (B):  {}", path_b.display());
+    let _ = writeln!(t, "size:           {width}x{height}");
+    let _ = writeln!(t, "pixels:         {} compared, {} non-finite excluded", m.pixels, m.non_finite);
+    let _ = writeln!(t, "RMSE:           {}", number(m.rmse));
+    let _ = writeln!(t, "relative MSE:   {}  (epsilon {RELATIVE_MSE_EPSILON})", number(m.relative_mse));
+    let _ = writeln!(t, "MAE:            {}", number(m.mean_absolute_error));
+    let _ = writeln!(t);
+    let _ = writeln!(t, "{:<8} {:>15} {:>15} {:>15} {:>12}", "channel", "mean A", "mean B", "A-B", "(A-B)/B");
+    for ((name, &ma), &mb) in CHANNELS.iter().zip(&m.means_a).zip(&m.means_b) {
+        let percent = if mb != 0.0 { format!("{:+.4}%", 100.0 * (ma - mb) / mb.abs()) } else { "-".to_string() };
+        let _ =
+            writeln!(t, "{:<8} {:>15} {:>15} {:>15} {:>12}", name, number(ma), number(mb), number(ma - mb), percent);
+    }
+    if let Some(z) = &m.z_test {
+        let _ = writeln!(t);
+        let _ = writeln!(
+            t,
+            "per-pixel Z-test: {} entries, worst z {:.3} at ({}, {}) channel {}, p threshold {:.3e} \
+             (alpha {alpha}, Šidák), {} failing: {}",
+            z.entries,
+            z.worst_z,
+            z.worst_pixel.0,
+            z.worst_pixel.1,
+            CHANNELS[z.worst_channel],
+            z.threshold_p,
+            z.failing,
+            if z.passed { "PASSED" } else { "FAILED" }
+        );
+    }
+    t
+}
+
+/// The false-colour difference image described in the module documentation.
+fn diff_image(a: &io::Image, b: &io::Image, variance: Option<(&io::Image, &io::Image)>) -> io::Image {
+    let finite = |p: &[f32; 3]| p.iter().all(|v| v.is_finite());
+    let differences: Vec<Option<f64>> = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .enumerate()
+        .map(|(i, (pa, pb))| {
+            let ok = finite(pa)
+                && finite(pb)
+                && variance.is_none_or(|(va, vb)| finite(&va.pixels[i]) && finite(&vb.pixels[i]));
+            ok.then(|| (0..3).map(|c| f64::from(pa[c]) - f64::from(pb[c])).sum::<f64>() / 3.0)
+        })
+        .collect();
+    let mut magnitudes: Vec<f64> = differences.iter().flatten().map(|d| d.abs()).collect();
+    let scale = percentile(&mut magnitudes, 0.99);
+    let scale = if scale > 0.0 { scale } else { 1.0 };
+    let pixels = differences
+        .iter()
+        .map(|d| match d {
+            None => [0.0, 1.0, 0.0],
+            Some(d) => {
+                let t = (d.abs() / scale).min(1.0) as f32;
+                if *d > 0.0 { [t, 0.0, 0.0] } else { [0.0, 0.0, t] }
+            }
+        })
+        .collect();
+    io::Image { width: a.width, height: a.height, pixels }
+}
+
+/// The `q`-quantile of `values` by the nearest-rank method (0 for no values). Reorders `values`.
+fn percentile(values: &mut [f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let rank = ((q * values.len() as f64).ceil() as usize).clamp(1, values.len());
+    *values.select_nth_unstable_by(rank - 1, f64::total_cmp).1
+}
+
+/// Errors unless `image`'s pixel buffer matches its non-zero size.
+fn check_shape(name: &str, image: &io::Image) -> Result<()> {
+    ensure!(
+        image.width > 0 && image.height > 0 && image.width.checked_mul(image.height) == Some(image.pixels.len()),
+        "{name} is {}x{} but has {} pixels",
+        image.width,
+        image.height,
+        image.pixels.len()
+    );
+    Ok(())
+}
+
+/// Errors with a message naming both files and both sizes unless the images have the same size.
+fn check_same_size(path_a: &Path, a: &io::Image, path_b: &Path, b: &io::Image) -> Result<()> {
+    ensure!(
+        (a.width, a.height) == (b.width, b.height),
+        "image sizes differ: '{}' is {}x{} but '{}' is {}x{}",
+        path_a.display(),
+        a.width,
+        a.height,
+        path_b.display(),
+        b.width,
+        b.height
+    );
+    Ok(())
+}
+
+/// Formats a metric with 7 significant digits: fixed-point for moderate magnitudes, scientific
+/// otherwise.
+fn number(x: f64) -> String {
+    let magnitude = x.abs();
+    if x == 0.0 {
+        "0".to_string()
+    } else if (1e-3..1e6).contains(&magnitude) {
+        let decimals = (6 - magnitude.log10().floor() as i32).max(0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.6e}")
+    }
+}
+
+/// Šidák-corrected per-test level `1 − (1 − alpha)^(1/tests)`, computed accurately for tiny alpha.
+fn sidak(alpha: f64, tests: usize) -> f64 {
+    -((-alpha).ln_1p() / tests.max(1) as f64).exp_m1()
+}
+
+/// Two-sided normal tail probability `P(|Z| ≥ z)` for `z ≥ 0`, i.e. `erfc(z / √2)`.
+fn two_sided_p(z: f64) -> f64 {
+    erfc(z / std::f64::consts::SQRT_2).clamp(0.0, 1.0)
+}
+
+/// The complementary error function, by the Chebyshev-fitted rational approximation of
+/// Numerical Recipes (`erfcc`): relative error below 1.2e-7 for every argument.
+fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let poly = -1.265_512_23
+        + t * (1.000_023_68
+            + t * (0.374_091_96
+                + t * (0.096_784_18
+                    + t * (-0.186_288_06
+                        + t * (0.278_868_07
+                            + t * (-1.135_203_98 + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
+    let result = t * (-z * z + poly).exp();
+    if x >= 0.0 { result } else { 2.0 - result }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(width: usize, height: usize, f: impl FnMut(usize, usize) -> [f32; 3]) -> io::Image {
+        io::Image::from_fn(width, height, f)
+    }
+
+    fn gradient() -> io::Image {
+        image(5, 4, |x, y| [0.1 * x as f32, 0.25 * y as f32, 0.5 + 0.05 * (x + y) as f32])
+    }
+
+    fn offset(a: &io::Image, by: f32) -> io::Image {
+        io::Image { pixels: a.pixels.iter().map(|p| p.map(|v| v + by)).collect(), ..a.clone() }
+    }
+
+    fn constant(like: &io::Image, value: f32) -> io::Image {
+        image(like.width, like.height, |_, _| [value; 3])
+    }
+
+    #[test]
+    fn identical_images_give_zero() {
+        let a = gradient();
+        let m = metrics(&a, &a, None, 1e-3).unwrap();
+        assert_eq!(m.pixels, 20);
+        assert_eq!(m.non_finite, 0);
+        assert_eq!((m.rmse, m.relative_mse, m.mean_absolute_error), (0.0, 0.0, 0.0));
+        assert_eq!(m.means_a, m.means_b);
+        assert_eq!(m.means_a, a.channel_means());
+        assert!(m.z_test.is_none());
+    }
+
+    #[test]
+    fn constant_offset_gives_the_known_numbers() {
+        let a = gradient();
+        let b = offset(&a, 0.1);
+        let m = metrics(&a, &b, None, 1e-3).unwrap();
+        assert!((m.rmse - 0.1).abs() < 1e-6, "{}", m.rmse);
+        assert!((m.mean_absolute_error - 0.1).abs() < 1e-6, "{}", m.mean_absolute_error);
+        for c in 0..3 {
+            assert!((m.means_b[c] - m.means_a[c] - 0.1).abs() < 1e-6);
+        }
+        // Closed form: mean over entries of 0.1² / (b² + 0.01).
+        let values: Vec<f64> = b.pixels.iter().flatten().map(|&v| f64::from(v)).collect();
+        let expected = values.iter().map(|v| 0.01 / (v * v + 0.01)).sum::<f64>() / values.len() as f64;
+        assert!((m.relative_mse - expected).abs() < 1e-6 * expected, "{} vs {expected}", m.relative_mse);
+        // A single known value: a = 0, b = 0.1 everywhere gives 0.01 / 0.02 = 0.5.
+        let zero = constant(&a, 0.0);
+        let m = metrics(&zero, &constant(&a, 0.1), None, 1e-3).unwrap();
+        assert!((m.relative_mse - 0.5).abs() < 1e-6, "{}", m.relative_mse);
+        assert!((m.rmse - 0.1).abs() < 1e-6);
+    }
+
+    #[test]
+    fn size_mismatch_is_an_error_naming_both_sizes() {
+        let error = metrics(&gradient(), &image(4, 5, |_, _| [0.0; 3]), None, 1e-3).unwrap_err().to_string();
+        assert!(error.contains("5x4") && error.contains("4x5"), "{error}");
+    }
+
+    #[test]
+    fn non_finite_pixels_are_counted_and_excluded() {
+        let a = gradient();
+        let mut b = a.clone();
+        b.set(2, 1, [f32::NAN, 0.0, 0.0]);
+        b.set(3, 3, [0.0, f32::INFINITY, 0.0]);
+        let m = metrics(&a, &b, None, 1e-3).unwrap();
+        assert_eq!((m.pixels, m.non_finite), (18, 2));
+        assert_eq!((m.rmse, m.relative_mse, m.mean_absolute_error), (0.0, 0.0, 0.0));
+        assert!(m.means_a.iter().all(|v| v.is_finite()));
+        assert_eq!(m.means_a, m.means_b);
+
+        let all_nan = constant(&a, f32::NAN);
+        let error = metrics(&a, &all_nan, None, 1e-3).unwrap_err().to_string();
+        assert!(error.contains("no pixel"), "{error}");
+    }
+
+    #[test]
+    fn z_test_fails_an_offset_and_passes_identical_images() {
+        let a = gradient();
+        let variance = constant(&a, 1e-6);
+        let m = metrics(&a, &a, Some((&variance, &variance)), 1e-3).unwrap();
+        let z = m.z_test.unwrap();
+        assert_eq!((z.entries, z.failing, z.worst_z), (60, 0, 0.0));
+        assert!(z.passed);
+        assert!((z.threshold_p - sidak(1e-3, 60)).abs() < 1e-15);
+
+        let mut b = a.clone();
+        b.set(3, 2, [a.get(3, 2)[0], a.get(3, 2)[1] - 0.01, a.get(3, 2)[2]]);
+        let m = metrics(&b, &a, Some((&variance, &variance)), 1e-3).unwrap();
+        let z = m.z_test.unwrap();
+        assert!(!z.passed);
+        assert_eq!(z.failing, 1);
+        assert_eq!((z.worst_pixel, z.worst_channel), ((3, 2), 1));
+        // z = -0.01 / sqrt(2e-6) ≈ -7.07 (up to f32 rounding of the pixel values).
+        assert!((z.worst_z + 0.01 / 2e-6f64.sqrt()).abs() < 1e-3, "{}", z.worst_z);
+
+        // An offset comparable to the noise passes: z = 0.001 / sqrt(2e-6) ≈ 0.71.
+        let m = metrics(&offset(&a, 0.001), &a, Some((&variance, &variance)), 1e-3).unwrap();
+        assert!(m.z_test.unwrap().passed);
+
+        // A size mismatch of a variance image is an error.
+        let small = image(2, 2, |_, _| [0.0; 3]);
+        assert!(metrics(&a, &a, Some((&small, &variance)), 1e-3).is_err());
+    }
+
+    #[test]
+    fn zero_variance_fails_any_difference() {
+        let a = gradient();
+        let zero = constant(&a, 0.0);
+        let z = metrics(&a, &a, Some((&zero, &zero)), 1e-3).unwrap().z_test.unwrap();
+        assert!(z.passed);
+        let z = metrics(&offset(&a, 1e-3), &a, Some((&zero, &zero)), 1e-3).unwrap().z_test.unwrap();
+        assert!(!z.passed && z.worst_z.is_infinite());
+    }
+
+    #[test]
+    fn normal_tail_matches_known_quantiles() {
+        assert!((erfc(0.0) - 1.0).abs() < 1e-7);
+        assert!((two_sided_p(1.959_963_984_540_054) - 0.05).abs() < 1e-8);
+        assert!((two_sided_p(3.290_526_731_491_926) - 1e-3).abs() < 1e-9);
+        assert!((two_sided_p(1.0) - 0.317_310_507_862_914_1).abs() < 1e-7);
+        assert!((erfc(-1.0) - 1.842_700_792_949_715).abs() < 1e-7);
+        // Deep tail, relative accuracy: P(|Z| >= 6) = 1.973175e-9.
+        assert!((two_sided_p(6.0) / 1.973_175_290_075_7e-9 - 1.0).abs() < 1e-6);
+        assert_eq!(two_sided_p(100.0), 0.0);
+    }
+
+    #[test]
+    fn sidak_level() {
+        assert!((sidak(0.05, 1) - 0.05).abs() < 1e-15);
+        let level = sidak(1e-3, 1000);
+        assert!(((1.0 - level).powi(1000) - (1.0 - 1e-3)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn diff_image_colours_and_scale() {
+        let a = image(10, 10, |x, y| [(x + 10 * y) as f32 / 100.0; 3]);
+        let b = constant(&a, 0.5);
+        let mut a_nan = a.clone();
+        a_nan.set(0, 0, [f32::NAN; 3]);
+        let diff = diff_image(&a_nan, &b, None);
+        assert_eq!((diff.width, diff.height), (10, 10));
+        assert_eq!(diff.get(0, 0), [0.0, 1.0, 0.0]);
+        assert_eq!(diff.get(0, 5), [0.0, 0.0, 0.0]);
+        // Differences -0.49..0.49; the 99th percentile of |d| over 99 pixels is 0.49.
+        let red = diff.get(9, 9);
+        assert!((red[0] - 1.0).abs() < 1e-6 && red[1] == 0.0 && red[2] == 0.0, "{red:?}");
+        let blue = diff.get(1, 0);
+        assert!(blue[0] == 0.0 && blue[1] == 0.0 && (blue[2] - 1.0).abs() < 1e-6, "{blue:?}");
+        let half = diff.get(4, 7);
+        assert!((half[0] - 0.24 / 0.49).abs() < 1e-5 && half[2] == 0.0, "{half:?}");
+        // Identical images: black, no division by zero.
+        assert!(diff_image(&b, &b, None).pixels.iter().all(|p| *p == [0.0; 3]));
+    }
+
+    #[test]
+    fn percentile_nearest_rank() {
+        let mut v: Vec<f64> = (1..=100).rev().map(f64::from).collect();
+        assert_eq!(percentile(&mut v, 0.99), 99.0);
+        assert_eq!(percentile(&mut [3.0], 0.99), 3.0);
+        assert_eq!(percentile(&mut [], 0.99), 0.0);
+    }
+
+    #[test]
+    fn numbers_are_formatted_readably() {
+        assert_eq!(number(0.0), "0");
+        assert_eq!(number(0.1), "0.1000000");
+        assert_eq!(number(12.5), "12.50000");
+        assert_eq!(number(1e-5), "1.000000e-5");
+    }
+}
