@@ -2,21 +2,20 @@
 //! driver and writes the images. This is the only place that makes user-facing decisions
 //! (defaults, file names, messages).
 
+mod checkpoint;
+mod compare;
+
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use std::sync::atomic::{AtomicBool, Ordering};
-
 use render::driver::{Budget, Control};
 use render::vcm::{Family, RadiusMode};
 use render::{Algorithm, RenderSettings};
 use scene::Scene;
-
-mod checkpoint;
-mod compare;
 use scene::cornell::{self, BUILTIN_SCENES};
 
 #[derive(Parser)]
