@@ -3,8 +3,8 @@
 //! rejected-sample counts. The random streams are keyed by (seed, iteration, path), and the
 //! radius schedule by the iteration index, so a resumed render equals an uninterrupted one.
 //!
-//! Format (version 1): the line `vcm-checkpoint 1`, then `key=value` lines, an empty line, and
-//! the sums as little-endian f64 triples, row-major. Files are written to `FILE.tmp` and
+//! Format (version 2): the line `vcm-checkpoint 2`, then `key=value` lines, an empty line, the
+//! sums and then the sums of squares, as little-endian f64 triples, row-major. Files are written to `FILE.tmp` and
 //! renamed over `FILE`, so a crash never leaves a truncated checkpoint.
 
 use std::collections::BTreeMap;
@@ -37,7 +37,7 @@ pub struct Recorded {
     pub memory_efficient: bool,
 }
 
-const MAGIC: &str = "vcm-checkpoint 1";
+const MAGIC: &str = "vcm-checkpoint 2";
 
 /// Writes `film` and `recorded` to `path` atomically (write, then rename).
 pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
@@ -58,7 +58,7 @@ pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
         writeln!(out, "iterations={}", film.iterations())?;
         writeln!(out, "rejected={}", film.rejected_samples())?;
         writeln!(out)?;
-        for pixel in film.sums() {
+        for pixel in film.sums().iter().chain(film.sum_squares()) {
             for value in pixel {
                 out.write_all(&value.to_le_bytes())?;
             }
@@ -110,18 +110,18 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
     let rejected: u64 = field(&fields, "rejected").ok_or_else(|| missing("rejected"))?;
     let data = &bytes[split + 2..];
     let (w, h) = recorded.resolution;
-    let expected = w as usize * h as usize * 24;
+    let pixels = w as usize * h as usize;
+    let expected = pixels * 48;
     if data.len() != expected {
         bail!(bad(format!("expected {expected} bytes of film for {w}x{h}, found {}", data.len())));
     }
-    let sums = data
-        .chunks_exact(24)
-        .map(|c| {
-            let v = |i: usize| f64::from_le_bytes(c[i * 8..i * 8 + 8].try_into().expect("8 bytes"));
-            [v(0), v(1), v(2)]
-        })
-        .collect();
-    let film = Film::from_sums(w, h, sums, iterations, rejected).ok_or_else(|| bad("film size".into()))?;
+    let mut triples = data.chunks_exact(24).map(|c| {
+        let v = |i: usize| f64::from_le_bytes(c[i * 8..i * 8 + 8].try_into().expect("8 bytes"));
+        [v(0), v(1), v(2)]
+    });
+    let sums = triples.by_ref().take(pixels).collect();
+    let squares = triples.collect();
+    let film = Film::from_sums(w, h, sums, squares, iterations, rejected).ok_or_else(|| bad("film size".into()))?;
     Ok((recorded, film))
 }
 
@@ -146,18 +146,20 @@ mod tests {
             memory_efficient: true,
         };
         let sums: Vec<[f64; 3]> = (0..6).map(|i| [i as f64 * 0.1, 1.0 / 3.0, f64::MIN_POSITIVE]).collect();
-        let film = Film::from_sums(3, 2, sums.clone(), 17, 2).unwrap();
+        let squares: Vec<[f64; 3]> = (0..6).map(|i| [i as f64, 0.5, 1e300]).collect();
+        let film = Film::from_sums(3, 2, sums.clone(), squares.clone(), 17, 2).unwrap();
         save(&path, &recorded, &film).unwrap();
         let (back, film_back) = load(&path).unwrap();
         assert_eq!(back, recorded);
         assert_eq!(film_back.sums(), &sums[..]);
+        assert_eq!(film_back.sum_squares(), &squares[..]);
         assert_eq!((film_back.iterations(), film_back.rejected_samples()), (17, 2));
         assert!(!dir.join("a.ckpt.tmp").exists(), "the temporary file is renamed");
         // Truncated film.
         let bytes = std::fs::read(&path).unwrap();
         std::fs::write(&path, &bytes[..bytes.len() - 5]).unwrap();
         let message = load(&path).unwrap_err().to_string();
-        assert!(message.contains("expected 144 bytes"), "{message}");
+        assert!(message.contains("expected 288 bytes"), "{message}");
         std::fs::write(&path, b"hello\n\n").unwrap();
         assert!(load(&path).unwrap_err().to_string().contains("first line"));
         std::fs::remove_dir_all(&dir).unwrap();

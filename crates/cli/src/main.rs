@@ -131,6 +131,11 @@ struct RenderArgs {
     /// Seconds between checkpoints (0: after every iteration).
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
     checkpoint_every: f64,
+    /// Also write the per-pixel variance of the mean (the squared standard error, estimated
+    /// from the spread of the iterations) to FILE (.exr, .pfm or .hdr), for
+    /// `vcm compare --variance-a/--variance-b`.
+    #[arg(long, value_name = "FILE")]
+    variance: Option<PathBuf>,
     /// Write one linear image per technique family (emitter-hit, next-event, light-tracing,
     /// connection, merging; they sum to the image) and a false-colour `vc-vm-share.png`
     /// (red: share of vertex connection, green: share of vertex merging) into DIR. VCM engine
@@ -279,6 +284,12 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
     if let Some(path) = &args.checkpoint {
         check_writable(path)?;
     }
+    if let Some(path) = &args.variance {
+        if io::ImageFormat::from_path(path)? == io::ImageFormat::Png {
+            bail!("--variance '{}': use a linear format (.exr, .pfm or .hdr), not PNG", path.display());
+        }
+        check_writable(path)?;
+    }
     if let Some(dir) = &args.techniques {
         if !matches!(algorithm, Algorithm::Vcm(_)) {
             bail!(
@@ -354,10 +365,17 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
     if let (Some(dir), Some(families)) = (&args.techniques, &result.family_films) {
         write_technique_images(dir, families, &options)?;
     }
+    if let Some(path) = &args.variance {
+        let variance = io::Image { width: image.width, height: image.height, pixels: film.variance_of_mean() };
+        io::write_image(path, &variance, &options)?;
+    }
     let seconds = result.elapsed.as_secs_f64();
     let iterations = film.iterations();
     let here = iterations - resumed_iterations.unwrap_or(0);
     let mut names: Vec<String> = outputs.iter().map(|(p, _)| p.display().to_string()).collect();
+    if let Some(path) = &args.variance {
+        names.push(format!("variance {}", path.display()));
+    }
     if let Some(path) = &args.checkpoint {
         names.push(format!("checkpoint {}", path.display()));
     }

@@ -193,3 +193,44 @@ fn diff_writes_a_png_of_the_right_size() {
     let [r, g, b] = diff.get(5, 3);
     assert!(r > 0.1 && g == 0.0 && b == 0.0, "{:?}", diff.get(5, 3));
 }
+
+#[test]
+fn rendered_variances_drive_the_per_pixel_z_test() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("compare-tests").join("rendered-variance");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let render = |name: &str, seed: &str, max_length: &str| {
+        let image = dir.join(format!("{name}.pfm"));
+        let variance = dir.join(format!("{name}-variance.pfm"));
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_vcm"))
+            .args(["render", "--scene", "1", "-a", "pt", "-i", "64", "-r", "24x24", "--quiet", "--seed", seed])
+            .args(["--max-length", max_length, "-o"])
+            .arg(&image)
+            .arg("--variance")
+            .arg(&variance)
+            .output()
+            .unwrap();
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        (image, variance)
+    };
+    let compare = |a: &(std::path::PathBuf, std::path::PathBuf), b: &(std::path::PathBuf, std::path::PathBuf)| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_vcm"))
+            .arg("compare")
+            .arg(&a.0)
+            .arg(&b.0)
+            .arg("--variance-a")
+            .arg(&a.1)
+            .arg("--variance-b")
+            .arg(&b.1)
+            .output()
+            .unwrap()
+    };
+    let first = render("first", "1", "10");
+    let second = render("second", "2", "10");
+    let short = render("short", "3", "2");
+    let same = compare(&first, &second);
+    assert_eq!(same.status.code(), Some(0), "{}", String::from_utf8_lossy(&same.stdout));
+    // Direct lighting only is darker than the full solution: the Z-test must see it.
+    let different = compare(&short, &second);
+    assert_eq!(different.status.code(), Some(1), "{}", String::from_utf8_lossy(&different.stdout));
+}

@@ -28,6 +28,8 @@ pub struct Film {
     width: u32,
     height: u32,
     sum: Vec<[f64; 3]>,
+    /// Sums of the squares of the iterations' pixel values, for the variance of the mean.
+    sum_squares: Vec<[f64; 3]>,
     iterations: u64,
     rejected_samples: u64,
 }
@@ -39,6 +41,7 @@ impl Film {
             width,
             height,
             sum: vec![[0.0; 3]; width as usize * height as usize],
+            sum_squares: vec![[0.0; 3]; width as usize * height as usize],
             iterations: 0,
             rejected_samples: 0,
         }
@@ -67,10 +70,12 @@ impl Film {
     /// Adds one iteration's frame and the number of samples the iteration rejected.
     pub fn add_iteration(&mut self, frame: &FrameBuffer, rejected_samples: u64) {
         assert_eq!((frame.width, frame.height), (self.width, self.height), "frame size must match the film");
-        for (sum, pixel) in self.sum.iter_mut().zip(&frame.pixels) {
-            sum[0] += pixel.r as f64;
-            sum[1] += pixel.g as f64;
-            sum[2] += pixel.b as f64;
+        for ((sum, squares), pixel) in self.sum.iter_mut().zip(&mut self.sum_squares).zip(&frame.pixels) {
+            for (c, value) in pixel.to_array().into_iter().enumerate() {
+                let value = value as f64;
+                sum[c] += value;
+                squares[c] += value * value;
+            }
         }
         self.iterations += 1;
         self.rejected_samples += rejected_samples;
@@ -81,27 +86,71 @@ impl Film {
         &self.sum
     }
 
-    /// A film with the given sums and counts (a checkpoint being resumed); `None` when the
-    /// number of sums does not match the size.
+    /// The per-pixel sums of the squares of the iterations' values, for checkpoints.
+    pub fn sum_squares(&self) -> &[[f64; 3]] {
+        &self.sum_squares
+    }
+
+    /// A film with the given sums, sums of squares and counts (a checkpoint being resumed);
+    /// `None` when their lengths do not match the size.
     pub fn from_sums(
         width: u32,
         height: u32,
         sums: Vec<[f64; 3]>,
+        sum_squares: Vec<[f64; 3]>,
         iterations: u64,
         rejected_samples: u64,
     ) -> Option<Self> {
-        (sums.len() == width as usize * height as usize).then_some(Self {
+        let pixels = width as usize * height as usize;
+        (sums.len() == pixels && sum_squares.len() == pixels).then_some(Self {
             width,
             height,
             sum: sums,
+            sum_squares,
             iterations,
             rejected_samples,
         })
+    }
+
+    /// Per pixel and channel, the estimated variance of the mean over iterations (the squared
+    /// standard error), `(Σx² − (Σx)²/n) / (n(n−1))`, from the spread of the iterations; zero
+    /// with fewer than two iterations.
+    pub fn variance_of_mean(&self) -> Vec<[f32; 3]> {
+        let n = self.iterations as f64;
+        if self.iterations < 2 {
+            return vec![[0.0; 3]; self.sum.len()];
+        }
+        self.sum
+            .iter()
+            .zip(&self.sum_squares)
+            .map(|(s, q)| std::array::from_fn(|c| ((q[c] - s[c] * s[c] / n).max(0.0) / (n * (n - 1.0))) as f32))
+            .collect()
     }
 
     /// The mean over iterations: the rendered image (row-major, top row first).
     pub fn mean(&self) -> Vec<[f32; 3]> {
         let scale = if self.iterations == 0 { 0.0 } else { 1.0 / self.iterations as f64 };
         self.sum.iter().map(|s| [(s[0] * scale) as f32, (s[1] * scale) as f32, (s[2] * scale) as f32]).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn variance_of_the_mean_matches_the_formula() {
+        let mut film = Film::new(1, 1);
+        let values = [1.0f32, 3.0, 2.0, 6.0];
+        for v in values {
+            let frame = FrameBuffer { width: 1, height: 1, pixels: vec![Rgb::new(v, 2.0 * v, 5.0)] };
+            film.add_iteration(&frame, 0);
+        }
+        // Sample variance of {1, 3, 2, 6} is 14/3; of the mean, 14/12.
+        let variance = film.variance_of_mean()[0];
+        assert!((variance[0] - 14.0 / 12.0).abs() < 1e-6, "{variance:?}");
+        assert!((variance[1] - 4.0 * 14.0 / 12.0).abs() < 1e-5);
+        assert_eq!(variance[2], 0.0, "a constant has no variance");
+        assert_eq!(film.mean()[0][0], 3.0);
     }
 }
