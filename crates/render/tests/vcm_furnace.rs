@@ -97,6 +97,26 @@ fn statistics(scene: &scene::Scene, max_length: u32, run: &Run, seed: u64) -> Ve
     stats
 }
 
+/// Z-tests the block and image means in `stats` against `expected` at family-wise level
+/// `alpha`; checks the power (image mean resolved to 2 % of the value). Returns the failure.
+fn judge(what: &str, stats: &[MeanVar], expected: f64, alpha: f64) -> Option<String> {
+    let means: Vec<f64> = stats.iter().map(MeanVar::mean).collect();
+    let errors: Vec<f64> = stats.iter().map(MeanVar::std_error).collect();
+    let outcome = z_test_entries(&means, &errors, &vec![expected; means.len()], &vec![0.0; means.len()], alpha);
+    let image = stats.last().unwrap();
+    let line = format!(
+        "{what}: image {:.5} ± {:.5} vs {expected:.5} (z = {:.2}); {outcome}",
+        image.mean(),
+        image.std_error(),
+        (image.mean() - expected) / image.std_error().max(1e-300),
+    );
+    eprintln!("{line}");
+    if expected > 0.0 {
+        assert!(image.std_error() < 0.02 * expected, "{line}: not enough power");
+    }
+    (!outcome.passed).then_some(line)
+}
+
 #[test]
 fn every_algorithm_gives_the_geometric_series() {
     let runs: Vec<&Run> = NON_MERGING.iter().chain(&MERGING).collect();
@@ -109,25 +129,8 @@ fn every_algorithm_gives_the_geometric_series() {
             let first = if run.algorithm == "lt" { 1 } else { 0 };
             let expected: f64 = (first..max_length).map(|k| emission as f64 * (albedo as f64).powi(k as i32)).sum();
             let stats = furnace_statistics(emission, albedo, max_length, run, 1000 + case as u64);
-            let means: Vec<f64> = stats.iter().map(MeanVar::mean).collect();
-            let errors: Vec<f64> = stats.iter().map(MeanVar::std_error).collect();
-            let outcome = z_test_entries(&means, &errors, &vec![expected; means.len()], &vec![0.0; means.len()], alpha);
-            let image = stats.last().unwrap();
-            let line = format!(
-                "Le={emission} ρ={albedo} K={max_length} {}: image {:.5} ± {:.5} vs {expected:.5} (z = {:.2}); {outcome}",
-                run.algorithm,
-                image.mean(),
-                image.std_error(),
-                (image.mean() - expected) / image.std_error().max(1e-300),
-            );
-            eprintln!("{line}");
-            // Power: the image mean is resolved to better than 2 % of the value.
-            if expected > 0.0 {
-                assert!(image.std_error() < 0.02 * expected, "{line}: not enough power");
-            }
-            if !outcome.passed {
-                failures.push(line);
-            }
+            let what = format!("Le={emission} ρ={albedo} K={max_length} {}", run.algorithm);
+            failures.extend(judge(&what, &stats, expected, alpha));
         }
     }
     assert!(failures.is_empty(), "furnace failures:\n{}", failures.join("\n"));
@@ -163,21 +166,7 @@ fn mixed_diffuse_and_mirror_material_gives_the_geometric_series() {
     for run in runs {
         let scene = common::furnace_with(emission, material, run.resolution);
         let stats = statistics(&scene, max_length, run, 77);
-        let means: Vec<f64> = stats.iter().map(MeanVar::mean).collect();
-        let errors: Vec<f64> = stats.iter().map(MeanVar::std_error).collect();
-        let outcome = z_test_entries(&means, &errors, &vec![expected; means.len()], &vec![0.0; means.len()], alpha);
-        let image = stats.last().unwrap();
-        let line = format!(
-            "mixed material {}: image {:.5} ± {:.5} vs {expected:.5}; {outcome}",
-            run.algorithm,
-            image.mean(),
-            image.std_error()
-        );
-        eprintln!("{line}");
-        assert!(image.std_error() < 0.02 * expected, "{line}: not enough power");
-        if !outcome.passed {
-            failures.push(line);
-        }
+        failures.extend(judge(&format!("mixed material {}", run.algorithm), &stats, expected, alpha));
     }
     assert!(failures.is_empty(), "furnace failures:\n{}", failures.join("\n"));
 }
