@@ -203,11 +203,6 @@ impl Bsdf {
         self.probabilities.diffuse == 0.0 && self.probabilities.phong == 0.0
     }
 
-    /// True when the BSDF has at least one non-delta lobe.
-    pub fn has_non_delta(&self) -> bool {
-        !self.is_delta()
-    }
-
     /// The transport mode the BSDF was built for.
     pub fn mode(&self) -> TransportMode {
         self.mode

@@ -20,13 +20,13 @@ use super::{Family, FamilyValues, Iteration, Techniques};
 pub fn trace_camera_path(
     scene: &Scene,
     it: &Iteration,
-    techniques: &Techniques,
     x: u32,
     y: u32,
     rng: &mut Rng,
     light_path: &[LightVertex],
     merge_source: Option<&MergeSource>,
 ) -> FamilyValues {
+    let techniques = &it.techniques;
     let pixel = (y * scene.camera.width + x) as usize;
     // The constants (radius) of this camera path: global, or the pixel's own (§6.1).
     let k = &it.pixel_constants(pixel);
@@ -107,7 +107,7 @@ pub fn trace_camera_path(
                 }
             }
         }
-        if path.scatter(&bsdf, hit.position, rng, specular_only, k).is_none() {
+        if !path.scatter(&bsdf, hit.position, rng, specular_only, k) {
             break;
         }
     }

@@ -4,23 +4,23 @@
 use math::{RAY_EPSILON, Ray, Rng};
 use scene::{Bsdf, Scene, TransportMode};
 
+use super::Iteration;
 use super::connect::{Splat, connect_to_camera};
 use super::light_vertex::LightVertex;
 use super::mis::SubPathMis;
 use super::subpath::SubPath;
-use super::{Iteration, Techniques};
 
 /// Traces one light sub-path: appends its stored vertices to `vertices` and its camera
 /// connections to `splats`.
 pub fn trace_light_path(
     scene: &Scene,
     it: &Iteration,
-    techniques: &Techniques,
     rng: &mut Rng,
     vertices: &mut Vec<LightVertex>,
     splats: &mut Vec<Splat>,
 ) {
     let k = &it.constants;
+    let techniques = &it.techniques;
     let pick_u = rng.uniform();
     let u_position = rng.uniform2();
     let u_direction = rng.uniform2();
@@ -72,7 +72,7 @@ pub fn trace_light_path(
         if path.path_length + 2 > it.max_length {
             break;
         }
-        if path.scatter(&bsdf, hit.position, rng, false, k).is_none() {
+        if !path.scatter(&bsdf, hit.position, rng, false, k) {
             break;
         }
     }

@@ -411,7 +411,7 @@ impl VcmEngine {
             }
             let mut rng = Rng::for_stream(seed, iteration, index as u64);
             let (x, y) = ((index % width) as u32, (index / width) as u32);
-            trace_camera_path(scene, it, &it.techniques, x, y, &mut rng, store.path(index), merge_source.as_ref())
+            trace_camera_path(scene, it, x, y, &mut rng, store.path(index), merge_source.as_ref())
         });
         let camera_pass = start.elapsed() - light_pass - grid_build;
         let splats = chunks.iter().map(|c| c.2.len()).sum();
@@ -466,13 +466,12 @@ impl VcmEngine {
                     let index = row * width + column;
                     let start = vertices.len();
                     let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
-                    trace_light_path(scene, it, &it.techniques, &mut light_rng, &mut vertices, &mut splats);
+                    trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats);
                     let mut rng = Rng::for_stream(seed, iteration, index as u64);
                     let light_path = &vertices[start..];
                     let mut values = trace_camera_path(
                         scene,
                         it,
-                        &it.techniques,
                         column as u32,
                         row as u32,
                         &mut rng,
@@ -542,7 +541,7 @@ fn trace_light_chunks(scene: &Scene, seed: u64, iteration: u64, it: &Iteration, 
             let end = ((chunk + 1) * LIGHT_CHUNK).min(pixel_count);
             for path in chunk * LIGHT_CHUNK..end {
                 let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
-                trace_light_path(scene, it, &it.techniques, &mut rng, &mut vertices, &mut splats);
+                trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats);
                 ends.push(vertices.len() as u32);
             }
             (vertices, ends, splats)

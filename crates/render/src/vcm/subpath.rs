@@ -28,15 +28,6 @@ pub struct SubPath {
     pub origin_offset: f32,
 }
 
-/// Why a scattering step stopped the walk or which event it sampled.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Scattered {
-    /// A non-specular lobe was sampled.
-    NonSpecular,
-    /// A specular lobe was sampled.
-    Specular,
-}
-
 impl SubPath {
     /// Distance² between the previous vertex and a hit at ray distance `distance`, to pass
     /// to [`SubPathMis::arrive`]; `None` for the first segment from an infinite light (§5.1).
@@ -51,7 +42,7 @@ impl SubPath {
 
     /// Samples the next direction at `position` from `bsdf` (only its specular lobes when
     /// `specular_only`), applies Russian roulette, updates throughput and MIS quantities
-    /// (eqs. 34–36, 53–55) and prepares the next ray. Returns `None` when the walk ends.
+    /// (eqs. 34–36, 53–55) and prepares the next ray. Returns `false` when the walk ends.
     pub fn scatter(
         &mut self,
         bsdf: &Bsdf,
@@ -59,12 +50,13 @@ impl SubPath {
         rng: &mut Rng,
         specular_only: bool,
         k: &MisConstants,
-    ) -> Option<Scattered> {
+    ) -> bool {
         let u = rng.uniform3();
-        let sample = if specular_only { bsdf.sample_specular(u)? } else { bsdf.sample(u)? };
+        let sample = if specular_only { bsdf.sample_specular(u) } else { bsdf.sample(u) };
+        let Some(sample) = sample else { return false };
         let continuation = bsdf.continuation_probability();
         if continuation < 1.0 && rng.uniform() >= continuation {
-            return None;
+            return false;
         }
         let specular = sample.lobe.is_specular();
         let forward = sample.pdf.forward.0 * continuation;
@@ -75,6 +67,6 @@ impl SubPath {
         self.ray = Ray::new(position + RAY_EPSILON * sample.direction, sample.direction);
         self.origin_offset = RAY_EPSILON;
         self.path_length += 1;
-        Some(if specular { Scattered::Specular } else { Scattered::NonSpecular })
+        true
     }
 }
