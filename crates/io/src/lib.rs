@@ -21,8 +21,14 @@ mod via_image;
 
 use std::path::Path;
 
+pub mod mesh;
+pub mod mitsuba;
+pub mod pbrt;
+mod scene_error;
+
 pub use crate::error::ImageError;
 pub use crate::linear_image::{Image, MAX_PIXELS, downsample_box};
+pub use crate::scene_error::SceneError;
 pub use crate::srgb::{linear_to_srgb8, srgb_eotf, srgb_oetf, srgb8_to_linear};
 
 /// An image file format supported by [`write_image`] and [`read_image`].
@@ -126,5 +132,22 @@ pub fn read_image(path: &Path) -> Result<Image, ImageError> {
         ImageFormat::Exr => exr_file::read(path),
         ImageFormat::Pfm => pfm::read(path),
         format @ (ImageFormat::Hdr | ImageFormat::Png) => via_image::read(path, format),
+    }
+}
+
+/// Loads a scene file, choosing the format by extension: `.xml` (Mitsuba 3) or `.pbrt`
+/// (pbrt-v4). `defines` override Mitsuba `<default>` parameters; a `.pbrt` file with
+/// defines is an error.
+pub fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<scene::desc::SceneDescription, SceneError> {
+    let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match extension.as_deref() {
+        Some("xml") => mitsuba::load(path, defines),
+        Some("pbrt") => {
+            if let Some((name, _)) = defines.first() {
+                return Err(SceneError::in_file(path, format!("-D {name}=…: pbrt scenes have no parameters")));
+            }
+            pbrt::load(path)
+        }
+        _ => Err(SceneError::in_file(path, "unknown scene format (expected a .xml Mitsuba 3 or a .pbrt pbrt-v4 file)")),
     }
 }

@@ -85,7 +85,8 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
             break;
         }
 
-        let Some(bsdf) = Bsdf::new(scene.material(&hit), hit.normal, -ray.direction, TransportMode::Radiance) else {
+        let Some(bsdf) = Bsdf::new(scene.material(&hit), &hit.shading_point(), -ray.direction, TransportMode::Radiance)
+        else {
             break;
         };
         let continuation = bsdf.continuation_probability();

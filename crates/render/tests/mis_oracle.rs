@@ -15,7 +15,7 @@
 use math::{Frame, PI, Rng, Vec3};
 use render::vcm::mis::{self, ConnectionPdfs, MisConstants, NeePdfs, SubPathMis};
 use scene::material::fresnel_dielectric;
-use scene::{Bsdf, Camera, Material, TransportMode};
+use scene::{Bsdf, Camera, Material, ReferenceMaterial, ShadingPoint, TransportMode};
 use spectrum::Rgb;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,7 +43,7 @@ struct TestPath {
     /// Normals at x0 (area light) and x1…x(k−1).
     normal: Vec<Vec3>,
     /// Materials at x1…x(k−1) (index 0 and k unused).
-    material: Vec<Material>,
+    material: Vec<ReferenceMaterial>,
     /// For infinite lights: unit direction from x1 towards the light.
     light_direction: Vec3,
     camera: Camera,
@@ -53,12 +53,17 @@ struct TestPath {
 const PICK: f32 = 0.5;
 const SCENE_RADIUS: f32 = 3.0;
 
-fn materials() -> [Material; 4] {
+fn materials() -> [ReferenceMaterial; 4] {
     [
-        Material::diffuse(Rgb::new(0.6, 0.5, 0.4)),
-        Material { diffuse: Rgb::splat(0.2), phong: Rgb::splat(0.5), phong_exponent: 8.0, ..Material::BLACK },
-        Material { mirror: Rgb::splat(0.9), ..Material::BLACK },
-        Material { mirror: Rgb::splat(1.0), ior: 1.5, ..Material::BLACK },
+        ReferenceMaterial::diffuse(Rgb::new(0.6, 0.5, 0.4)),
+        ReferenceMaterial {
+            diffuse: Rgb::splat(0.2),
+            phong: Rgb::splat(0.5),
+            phong_exponent: 8.0,
+            ..ReferenceMaterial::BLACK
+        },
+        ReferenceMaterial { mirror: Rgb::splat(0.9), ..ReferenceMaterial::BLACK },
+        ReferenceMaterial { mirror: Rgb::splat(1.0), ior: 1.5, ..ReferenceMaterial::BLACK },
     ]
 }
 
@@ -92,13 +97,13 @@ impl TestPath {
         // Walk from the camera: x[k], x[k-1], …, x[1], then the light.
         let mut rev_x = vec![camera_position];
         let mut rev_n = vec![Vec3::Z];
-        let mut rev_m = vec![Material::BLACK];
+        let mut rev_m = vec![ReferenceMaterial::BLACK];
         let mut direction = first;
         for _ in 1..k {
             let position = *rev_x.last().unwrap() + direction * (0.5 + rng.uniform() * 1.5);
             let normal = facing_normal(-direction, rng);
             let material = all[(rng.uniform() * 4.0) as usize % 4];
-            let bsdf = Bsdf::new(&material, normal, -direction, TransportMode::Radiance)?;
+            let bsdf = reference_bsdf(&material, normal, -direction, TransportMode::Radiance)?;
             let sample = bsdf.sample(rng.uniform3())?;
             rev_x.push(position);
             rev_n.push(normal);
@@ -117,7 +122,7 @@ impl TestPath {
         };
         rev_x.push(x0);
         rev_n.push(light_normal);
-        rev_m.push(Material::BLACK);
+        rev_m.push(ReferenceMaterial::BLACK);
         rev_x.reverse();
         rev_n.reverse();
         rev_m.reverse();
@@ -164,7 +169,7 @@ impl TestPath {
     /// (forward, reverse), Russian roulette included, for the walk that arrived from `from`.
     fn scatter_pdfs(&self, i: usize, from: usize, to: usize) -> (f32, f32) {
         let mode = if from > i { TransportMode::Radiance } else { TransportMode::Importance };
-        let bsdf = Bsdf::new(&self.material[i], self.normal[i], self.dir(i, from), mode).unwrap();
+        let bsdf = reference_bsdf(&self.material[i], self.normal[i], self.dir(i, from), mode).unwrap();
         let cont = bsdf.continuation_probability();
         if self.is_specular(i) {
             let m = &self.material[i];
@@ -450,4 +455,9 @@ fn frames_are_orthonormal_for_the_generated_normals() {
         let f = Frame::from_z(n);
         assert!(f.x.dot(n).abs() < 1e-5);
     }
+}
+
+/// The BSDF of a reference material with the shading normal equal to the geometric one.
+fn reference_bsdf(material: &ReferenceMaterial, normal: Vec3, fixed: Vec3, mode: TransportMode) -> Option<Bsdf> {
+    Bsdf::new(&Material::from(*material), &ShadingPoint::flat(normal), fixed, mode)
 }

@@ -13,7 +13,7 @@ mod common;
 
 use render::driver::{Budget, Renderer};
 use render::{Algorithm, RenderSettings};
-use scene::Material;
+use scene::{Material, ReferenceMaterial};
 use spectrum::Rgb;
 use testkit::{MeanVar, sidak, z_test_entries};
 
@@ -157,14 +157,15 @@ fn mixed_diffuse_and_mirror_material_gives_the_geometric_series() {
     // no non-mixed vertex to fall back to); BPT and VCM must handle specular lobes sampled at
     // vertices that are stored and connected. (Light tracing cannot see the mirror lobe of the
     // first surface and is left out.)
-    let material = Material { diffuse: Rgb::splat(0.3), mirror: Rgb::splat(0.4), ..Material::BLACK };
+    let material: Material =
+        ReferenceMaterial { diffuse: Rgb::splat(0.3), mirror: Rgb::splat(0.4), ..ReferenceMaterial::BLACK }.into();
     let (emission, max_length) = (1.0f32, 4u32);
     let expected: f64 = (0..max_length).map(|k| 0.7f64.powi(k as i32)).sum::<f64>() * emission as f64;
     let runs: Vec<&Run> = NON_MERGING.iter().filter(|r| r.algorithm != "lt").chain(&MERGING).collect();
     let alpha = sidak(1e-3, runs.len());
     let mut failures = Vec::new();
     for run in runs {
-        let scene = common::furnace_with(emission, material, run.resolution);
+        let scene = common::furnace_with(emission, material.clone(), run.resolution);
         let stats = statistics(&scene, max_length, run, 77);
         failures.extend(judge(&format!("mixed material {}", run.algorithm), &stats, expected, alpha));
     }

@@ -6,7 +6,7 @@ use spectrum::Rgb;
 
 use crate::camera::Camera;
 use crate::light::{AreaLight, BackgroundLight, DirectionalLight, Light, PointLight};
-use crate::material::Material;
+use crate::material::{Material, ReferenceMaterial};
 use crate::scene::{Primitive, Scene};
 use crate::shape::{Shape, Sphere, Triangle};
 
@@ -91,15 +91,15 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
     // Materials M0–M8 (cornell.md §3.5).
     let grey = |x: f32| Rgb::splat(x);
     let materials = vec![
-        Material::BLACK, // M0 emitter triangle 1
-        Material::BLACK, // M1 emitter triangle 2
-        Material { diffuse: grey(0.1), phong: grey(0.7), phong_exponent: 90.0, ..Material::BLACK }, // M2 glossy floor
-        Material::diffuse(Rgb::new(0.156863, 0.803922, 0.172549)), // M3 green
-        Material::diffuse(Rgb::new(0.803922, 0.152941, 0.152941)), // M4 red
-        Material::diffuse(grey(0.803922)), // M5 white
-        Material { mirror: grey(1.0), ..Material::BLACK }, // M6 mirror
-        Material { mirror: grey(1.0), ior: 1.6, ..Material::BLACK }, // M7 glass
-        Material::diffuse(Rgb::new(0.156863, 0.172549, 0.803922)), // M8 blue
+        ReferenceMaterial::BLACK, // M0 emitter triangle 1
+        ReferenceMaterial::BLACK, // M1 emitter triangle 2
+        ReferenceMaterial { diffuse: grey(0.1), phong: grey(0.7), phong_exponent: 90.0, ..ReferenceMaterial::BLACK }, // M2 glossy floor
+        ReferenceMaterial::diffuse(Rgb::new(0.156863, 0.803922, 0.172549)), // M3 green
+        ReferenceMaterial::diffuse(Rgb::new(0.803922, 0.152941, 0.152941)), // M4 red
+        ReferenceMaterial::diffuse(grey(0.803922)),                         // M5 white
+        ReferenceMaterial { mirror: grey(1.0), ..ReferenceMaterial::BLACK }, // M6 mirror
+        ReferenceMaterial { mirror: grey(1.0), ior: 1.6, ..ReferenceMaterial::BLACK }, // M7 glass
+        ReferenceMaterial::diffuse(Rgb::new(0.156863, 0.172549, 0.803922)), // M8 blue
     ];
     const M0: u32 = 0;
     const M1: u32 = 1;
@@ -250,6 +250,7 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
         .iter()
         .find(|s| s.mask == mask)
         .map_or_else(|| format!("cornell-mask-{mask}"), |s| s.name.to_string());
+    let materials = materials.into_iter().map(Material::from).collect();
     Some(Scene::new(name, primitives, materials, lights, camera))
 }
 

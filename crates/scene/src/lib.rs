@@ -6,14 +6,19 @@
 pub mod accel;
 pub mod camera;
 pub mod cornell;
+pub mod desc;
 pub mod film;
 pub mod light;
 pub mod material;
 pub mod scene;
 pub mod shape;
+pub mod texture;
 
 pub use camera::Camera;
 pub use film::{Film, FrameBuffer};
 pub use light::{BoundingSphere, DirectSample, EmissionSample, HitRadiance, Light};
-pub use material::{Bsdf, BsdfEval, BsdfSample, LobeKind, Material, PdfPair, TransportMode};
+pub use material::{
+    Bsdf, BsdfEval, BsdfSample, LobeKind, Material, PdfPair, ReferenceMaterial, ShadingPoint, TransportMode,
+};
 pub use scene::{Primitive, Scene, SurfaceHit};
+pub use texture::Texture;

@@ -14,16 +14,19 @@
 //! work from both sides. Specular lobes use "pdf = probability of picking the lobe" and
 //! value `ρ/|cos θ|` (tech report eq. 52).
 
-use math::{COSINE_EPSILON, Frame, INV_PI, PdfW, Vec3, sqr, warp};
+use math::{COSINE_EPSILON, Frame, INV_PI, PdfW, Vec2, Vec3, sqr, warp};
+
+use crate::texture::Texture;
 use spectrum::Rgb;
 
 /// Below this cosine between the generated direction and the mirrored fixed direction, the
 /// Phong lobe is zero.
 const PHONG_COSINE_EPSILON: f32 = 1e-3;
 
-/// A material as a sum of components (all reflectances in `[0, 1]` per channel).
+/// SmallVCM's material as a sum of components (all reflectances in `[0, 1]` per channel): the
+/// material of the built-in reference scenes.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Material {
+pub struct ReferenceMaterial {
     /// Lambertian reflectance ρd.
     pub diffuse: Rgb,
     /// Phong reflectance ρs.
@@ -36,14 +39,173 @@ pub struct Material {
     pub ior: f32,
 }
 
-impl Material {
+impl ReferenceMaterial {
     /// A material that absorbs everything (used for emitters).
-    pub const BLACK: Material =
-        Material { diffuse: Rgb::BLACK, phong: Rgb::BLACK, phong_exponent: 1.0, mirror: Rgb::BLACK, ior: -1.0 };
+    pub const BLACK: ReferenceMaterial = ReferenceMaterial {
+        diffuse: Rgb::BLACK,
+        phong: Rgb::BLACK,
+        phong_exponent: 1.0,
+        mirror: Rgb::BLACK,
+        ior: -1.0,
+    };
 
     /// Pure Lambertian reflector.
     pub const fn diffuse(rho: Rgb) -> Self {
-        Material { diffuse: rho, ..Self::BLACK }
+        ReferenceMaterial { diffuse: rho, ..Self::BLACK }
+    }
+}
+
+/// A material: the closed set of scattering models the renderer knows. Index-of-refraction
+/// fields are absolute (`int_ior` inside, `ext_ior` outside, the side the geometric normal
+/// points to); `alpha` is the GGX roughness (`α = roughness²` in the Disney convention, as
+/// Mitsuba's `alpha`). Conductors take the complex IOR `eta + i·k` relative to the outside.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Material {
+    /// SmallVCM's component material (built-in scenes).
+    Reference(ReferenceMaterial),
+    /// Lambertian, one-sided (black from behind, as Mitsuba's `diffuse`).
+    Diffuse {
+        /// Reflectance.
+        reflectance: Texture,
+    },
+    /// Smooth conductor (Fresnel-weighted mirror); `eta = 0, k = ∞`-like perfect mirrors use
+    /// [`Material::perfect_mirror`].
+    Conductor {
+        /// Real part of the relative IOR per channel.
+        eta: Rgb,
+        /// Imaginary part (absorption) per channel.
+        k: Rgb,
+        /// Factor on the reflection.
+        specular_reflectance: Texture,
+    },
+    /// GGX microfacet conductor with visible-normal sampling.
+    RoughConductor {
+        /// Roughness along the tangent.
+        alpha_u: f32,
+        /// Roughness along the bitangent.
+        alpha_v: f32,
+        /// Real part of the relative IOR per channel.
+        eta: Rgb,
+        /// Imaginary part per channel.
+        k: Rgb,
+        /// Factor on the reflection.
+        specular_reflectance: Texture,
+    },
+    /// Smooth dielectric interface (Fresnel reflection + refraction).
+    Dielectric {
+        /// IOR inside.
+        int_ior: f32,
+        /// IOR outside.
+        ext_ior: f32,
+        /// Factor on reflection.
+        specular_reflectance: Texture,
+        /// Factor on transmission.
+        specular_transmittance: Texture,
+    },
+    /// Thin dielectric sheet: reflection and straight-through transmission with the
+    /// inter-reflections of a thin slab summed analytically.
+    ThinDielectric {
+        /// IOR of the sheet.
+        int_ior: f32,
+        /// IOR around it.
+        ext_ior: f32,
+        /// Factor on reflection.
+        specular_reflectance: Texture,
+        /// Factor on transmission.
+        specular_transmittance: Texture,
+    },
+    /// GGX microfacet dielectric (Walter et al. 2007).
+    RoughDielectric {
+        /// Roughness along the tangent.
+        alpha_u: f32,
+        /// Roughness along the bitangent.
+        alpha_v: f32,
+        /// IOR inside.
+        int_ior: f32,
+        /// IOR outside.
+        ext_ior: f32,
+        /// Factor on reflection.
+        specular_reflectance: Texture,
+        /// Factor on transmission.
+        specular_transmittance: Texture,
+    },
+    /// Diffuse base under a smooth dielectric coating (Mitsuba's `plastic`).
+    Plastic {
+        /// Reflectance of the base.
+        diffuse_reflectance: Texture,
+        /// Factor on the coating's specular reflection.
+        specular_reflectance: Texture,
+        /// IOR of the coating.
+        int_ior: f32,
+        /// IOR outside.
+        ext_ior: f32,
+        /// Account for colour shifts from internal scattering (Mitsuba's `nonlinear`).
+        nonlinear: bool,
+    },
+    /// Diffuse base under a rough (GGX) dielectric coating (Mitsuba's `roughplastic`).
+    RoughPlastic {
+        /// Isotropic GGX roughness of the coating.
+        alpha: f32,
+        /// Reflectance of the base.
+        diffuse_reflectance: Texture,
+        /// Factor on the coating's specular reflection.
+        specular_reflectance: Texture,
+        /// IOR of the coating.
+        int_ior: f32,
+        /// IOR outside.
+        ext_ior: f32,
+        /// Account for colour shifts from internal scattering.
+        nonlinear: bool,
+    },
+    /// Linear blend `(1 − weight)·first + weight·second`.
+    Blend {
+        /// Blend weight in [0, 1] (the first channel of the texture is used).
+        weight: Texture,
+        /// Material at weight 0.
+        first: Box<Material>,
+        /// Material at weight 1.
+        second: Box<Material>,
+    },
+    /// Makes a one-sided material two-sided: seen from behind it behaves as `back` (or as
+    /// `front` when `back` is `None`) with the normal flipped.
+    TwoSided {
+        /// Material on the front side.
+        front: Box<Material>,
+        /// Material on the back side; `None` = the same as the front.
+        back: Option<Box<Material>>,
+    },
+}
+
+impl Material {
+    /// A perfect mirror (Mitsuba's `conductor` without a material).
+    pub fn perfect_mirror() -> Self {
+        Material::Conductor { eta: Rgb::BLACK, k: Rgb::BLACK, specular_reflectance: Texture::Constant(Rgb::WHITE) }
+    }
+}
+
+impl From<ReferenceMaterial> for Material {
+    fn from(m: ReferenceMaterial) -> Self {
+        Material::Reference(m)
+    }
+}
+
+/// The local geometry at a surface point that a BSDF needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingPoint {
+    /// Unit geometric normal (defines the sides of the surface and all cosines the
+    /// integrators use).
+    pub geometric_normal: Vec3,
+    /// Unit shading normal (interpolated mesh normal; equal to the geometric normal
+    /// otherwise). BSDF lobes are oriented by it.
+    pub shading_normal: Vec3,
+    /// Texture coordinates.
+    pub uv: Vec2,
+}
+
+impl ShadingPoint {
+    /// A point whose shading normal is its geometric normal, at uv (0, 0).
+    pub fn flat(normal: Vec3) -> Self {
+        Self { geometric_normal: normal, shading_normal: normal, uv: Vec2::ZERO }
     }
 }
 
@@ -123,7 +285,7 @@ struct LobeProbabilities {
 /// A BSDF at one hit, for one fixed direction and transport mode.
 #[derive(Clone, Copy, Debug)]
 pub struct Bsdf {
-    material: Material,
+    material: ReferenceMaterial,
     frame: Frame,
     local_fixed: Vec3,
     mode: TransportMode,
@@ -162,7 +324,14 @@ impl Bsdf {
     /// Builds the BSDF at a hit with unit geometric `normal` for the unit `fixed` direction
     /// (pointing away from the surface). Returns `None` when the material cannot scatter
     /// (all components black) or the fixed direction is grazing.
-    pub fn new(material: &Material, normal: Vec3, fixed: Vec3, mode: TransportMode) -> Option<Bsdf> {
+    pub fn new(material: &Material, point: &ShadingPoint, fixed: Vec3, mode: TransportMode) -> Option<Bsdf> {
+        match material {
+            Material::Reference(m) => Self::reference(m, point.geometric_normal, fixed, mode),
+            _ => None,
+        }
+    }
+
+    fn reference(material: &ReferenceMaterial, normal: Vec3, fixed: Vec3, mode: TransportMode) -> Option<Bsdf> {
         let frame = Frame::from_z(normal);
         let local_fixed = frame.to_local(fixed);
         if local_fixed.z.abs() < COSINE_EPSILON {

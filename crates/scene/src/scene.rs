@@ -1,12 +1,12 @@
 //! The scene container: primitives with their materials and emitters, the lights, the camera,
 //! the bounding sphere and the BVH, with the two ray queries every integrator uses.
 
-use math::{Aabb, RAY_EPSILON, Ray, Vec3};
+use math::{Aabb, RAY_EPSILON, Ray, Vec2, Vec3};
 
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::light::{BoundingSphere, Light};
-use crate::material::Material;
+use crate::material::{Material, ShadingPoint};
 use crate::shape::Shape;
 
 /// A shape with the index of its material and, if it emits, of its light.
@@ -27,6 +27,10 @@ pub struct SurfaceHit {
     pub position: Vec3,
     /// Unit geometric normal (as stored: triangles by winding, spheres outward).
     pub normal: Vec3,
+    /// Unit shading normal (interpolated vertex normals; the geometric normal otherwise).
+    pub shading_normal: Vec3,
+    /// Texture coordinates.
+    pub uv: Vec2,
     /// Distance along the ray from its origin.
     pub distance: f32,
     /// Index of the primitive hit.
@@ -35,6 +39,14 @@ pub struct SurfaceHit {
     pub material: u32,
     /// Light index when the primitive emits.
     pub light: Option<u32>,
+}
+
+impl SurfaceHit {
+    /// The local geometry a BSDF is built from.
+    #[inline]
+    pub fn shading_point(&self) -> ShadingPoint {
+        ShadingPoint { geometric_normal: self.normal, shading_normal: self.shading_normal, uv: self.uv }
+    }
 }
 
 /// A complete scene ready to render.
@@ -91,9 +103,12 @@ impl Scene {
             .closest_hit(ray, f32::INFINITY, |i, r, t_max| self.primitives[i as usize].shape.intersect(r, t_max))?;
         let primitive = &self.primitives[index as usize];
         let position = ray.at(distance);
+        let normal = primitive.shape.normal_at(position);
         Some(SurfaceHit {
             position,
-            normal: primitive.shape.normal_at(position),
+            normal,
+            shading_normal: normal,
+            uv: Vec2::ZERO,
             distance,
             primitive: index,
             material: primitive.material,

@@ -4,7 +4,7 @@
 
 use math::{Frame, Rng, Vec3, reflect, sqr};
 use scene::material::fresnel_dielectric;
-use scene::{Bsdf, LobeKind, Material, TransportMode};
+use scene::{Bsdf, LobeKind, Material, ReferenceMaterial, ShadingPoint, TransportMode};
 use spectrum::Rgb;
 use testkit::{assert_chi2, chi2_sphere, sidak};
 
@@ -21,15 +21,26 @@ fn direction_at(normal: Vec3, theta_degrees: f32, azimuth: f32) -> Vec3 {
     Frame::from_z(normal).to_world(local).normalize()
 }
 
-fn glossy_materials() -> Vec<(&'static str, Material)> {
+fn glossy_materials() -> Vec<(&'static str, ReferenceMaterial)> {
     vec![
-        ("white diffuse", Material::diffuse(Rgb::splat(0.803922))),
+        ("white diffuse", ReferenceMaterial::diffuse(Rgb::splat(0.803922))),
         (
             "glossy floor (diffuse 0.1 + Phong 0.7, n = 90)",
-            Material { diffuse: Rgb::splat(0.1), phong: Rgb::splat(0.7), phong_exponent: 90.0, ..Material::BLACK },
+            ReferenceMaterial {
+                diffuse: Rgb::splat(0.1),
+                phong: Rgb::splat(0.7),
+                phong_exponent: 90.0,
+                ..ReferenceMaterial::BLACK
+            },
         ),
-        ("Phong n = 10", Material { phong: Rgb::splat(0.9), phong_exponent: 10.0, ..Material::BLACK }),
-        ("Phong n = 500", Material { phong: Rgb::new(0.2, 0.5, 0.4), phong_exponent: 500.0, ..Material::BLACK }),
+        (
+            "Phong n = 10",
+            ReferenceMaterial { phong: Rgb::splat(0.9), phong_exponent: 10.0, ..ReferenceMaterial::BLACK },
+        ),
+        (
+            "Phong n = 500",
+            ReferenceMaterial { phong: Rgb::new(0.2, 0.5, 0.4), phong_exponent: 500.0, ..ReferenceMaterial::BLACK },
+        ),
     ]
 }
 
@@ -44,7 +55,7 @@ fn non_specular_samplers_match_their_pdfs() {
         for theta in ANGLES {
             for mode in MODES {
                 let fixed = direction_at(n, theta, 0.7);
-                let bsdf = Bsdf::new(&material, n, fixed, mode).unwrap();
+                let bsdf = reference_bsdf(&material, n, fixed, mode).unwrap();
                 // Bin in a frame around the mirrored fixed direction (the Phong lobe axis),
                 // where a peaked lobe spreads over many bins.
                 let axis = if material.phong.is_black() { n } else { reflect(fixed, n) };
@@ -70,7 +81,7 @@ fn sampled_and_evaluated_values_and_pdfs_agree() {
     for (name, material) in glossy_materials() {
         for theta in ANGLES {
             for mode in MODES {
-                let bsdf = Bsdf::new(&material, n, direction_at(n, theta, 2.0), mode).unwrap();
+                let bsdf = reference_bsdf(&material, n, direction_at(n, theta, 2.0), mode).unwrap();
                 let mut checked = 0;
                 for _ in 0..2000 {
                     let Some(s) = bsdf.sample(rng.uniform3()) else { continue };
@@ -104,7 +115,8 @@ fn swapping_fixed_and_generated_swaps_the_pdfs_and_the_value_is_reciprocal() {
                     .normalize()
             };
             for mode in MODES {
-                let (Some(from_a), Some(from_b)) = (Bsdf::new(&material, n, a, mode), Bsdf::new(&material, n, b, mode))
+                let (Some(from_a), Some(from_b)) =
+                    (reference_bsdf(&material, n, a, mode), reference_bsdf(&material, n, b, mode))
                 else {
                     continue;
                 };
@@ -131,7 +143,7 @@ fn albedo_never_exceeds_the_reflectance() {
     for (name, material) in glossy_materials() {
         let bound = (material.diffuse + material.phong).max_component();
         for theta in ANGLES {
-            let bsdf = Bsdf::new(&material, n, direction_at(n, theta, 1.0), TransportMode::Radiance).unwrap();
+            let bsdf = reference_bsdf(&material, n, direction_at(n, theta, 1.0), TransportMode::Radiance).unwrap();
             let mut rng = Rng::for_stream(11, theta as u64, 0);
             let mut stats = testkit::MeanVar::new();
             for _ in 0..100_000 {
@@ -154,13 +166,17 @@ fn albedo_never_exceeds_the_reflectance() {
 #[test]
 fn one_sided_lobes_are_zero_from_and_towards_the_back() {
     let n = Vec3::Z;
-    let material =
-        Material { diffuse: Rgb::splat(0.5), phong: Rgb::splat(0.3), phong_exponent: 5.0, ..Material::BLACK };
+    let material = ReferenceMaterial {
+        diffuse: Rgb::splat(0.5),
+        phong: Rgb::splat(0.3),
+        phong_exponent: 5.0,
+        ..ReferenceMaterial::BLACK
+    };
     let front = Vec3::new(0.3, 0.1, 0.9).normalize();
     let back = Vec3::new(0.2, -0.3, -0.8).normalize();
-    let bsdf = Bsdf::new(&material, n, front, TransportMode::Radiance).unwrap();
+    let bsdf = reference_bsdf(&material, n, front, TransportMode::Radiance).unwrap();
     assert!(bsdf.evaluate(back).is_none());
-    let from_back = Bsdf::new(&material, n, back, TransportMode::Radiance).unwrap();
+    let from_back = reference_bsdf(&material, n, back, TransportMode::Radiance).unwrap();
     assert!(from_back.evaluate(Vec3::new(-0.2, 0.3, -0.8).normalize()).is_none());
     assert!(from_back.evaluate(front).is_none());
     let mut rng = Rng::for_stream(1, 1, 1);
@@ -169,12 +185,12 @@ fn one_sided_lobes_are_zero_from_and_towards_the_back() {
 
 #[test]
 fn mirror_reflects_exactly_from_both_sides() {
-    let mirror = Material { mirror: Rgb::splat(1.0), ..Material::BLACK };
+    let mirror = ReferenceMaterial { mirror: Rgb::splat(1.0), ..ReferenceMaterial::BLACK };
     let n = normal();
     for theta in [0.5f32, 45.0, 89.0, 120.0, 170.0] {
         let fixed = direction_at(n, theta, 0.3);
         for mode in MODES {
-            let bsdf = Bsdf::new(&mirror, n, fixed, mode).unwrap();
+            let bsdf = reference_bsdf(&mirror, n, fixed, mode).unwrap();
             assert!(bsdf.is_delta());
             assert!(bsdf.evaluate(reflect(fixed, n)).is_none(), "delta lobes do not evaluate");
             let s = bsdf.sample([0.3, 0.6, 0.5]).unwrap();
@@ -189,7 +205,7 @@ fn mirror_reflects_exactly_from_both_sides() {
 
 #[test]
 fn glass_chooses_reflection_with_the_fresnel_probability_and_refracts_by_snell() {
-    let glass = Material { mirror: Rgb::splat(1.0), ior: 1.6, ..Material::BLACK };
+    let glass = ReferenceMaterial { mirror: Rgb::splat(1.0), ior: 1.6, ..ReferenceMaterial::BLACK };
     let n = normal();
     // Outside at several angles, inside below and above the critical angle (38.7°).
     for theta in [0.5f32, 30.0, 60.0, 85.0, 150.0, 170.0, 130.0] {
@@ -197,7 +213,7 @@ fn glass_chooses_reflection_with_the_fresnel_probability_and_refracts_by_snell()
         let cos_fixed = fixed.dot(n);
         let fresnel = fresnel_dielectric(cos_fixed, 1.6);
         for mode in MODES {
-            let bsdf = Bsdf::new(&glass, n, fixed, mode).unwrap();
+            let bsdf = reference_bsdf(&glass, n, fixed, mode).unwrap();
             assert!(bsdf.is_delta());
             assert_eq!(bsdf.continuation_probability(), 1.0);
             let mut rng = Rng::for_stream(9, theta as u64, mode as u64);
@@ -251,8 +267,8 @@ fn glass_chooses_reflection_with_the_fresnel_probability_and_refracts_by_snell()
 
 #[test]
 fn camera_ray_entering_glass_is_scaled_by_the_inverse_squared_ior() {
-    let glass = Material { mirror: Rgb::splat(1.0), ior: 1.6, ..Material::BLACK };
-    let bsdf = Bsdf::new(&glass, Vec3::Z, Vec3::Z, TransportMode::Radiance).unwrap();
+    let glass = ReferenceMaterial { mirror: Rgb::splat(1.0), ior: 1.6, ..ReferenceMaterial::BLACK };
+    let bsdf = reference_bsdf(&glass, Vec3::Z, Vec3::Z, TransportMode::Radiance).unwrap();
     let s = bsdf.sample([0.0, 0.0, 0.999]).unwrap();
     assert_eq!(s.lobe, LobeKind::SpecularTransmission);
     let weight = (s.value * (s.cos_generated / s.pdf.forward.0)).r;
@@ -261,7 +277,12 @@ fn camera_ray_entering_glass_is_scaled_by_the_inverse_squared_ior() {
 
 #[test]
 fn black_materials_do_not_scatter() {
-    assert!(Bsdf::new(&Material::BLACK, Vec3::Z, Vec3::Z, TransportMode::Radiance).is_none());
-    let white = Material::diffuse(Rgb::splat(0.5));
-    assert!(Bsdf::new(&white, Vec3::Z, Vec3::X, TransportMode::Radiance).is_none(), "grazing fixed direction");
+    assert!(reference_bsdf(&ReferenceMaterial::BLACK, Vec3::Z, Vec3::Z, TransportMode::Radiance).is_none());
+    let white = ReferenceMaterial::diffuse(Rgb::splat(0.5));
+    assert!(reference_bsdf(&white, Vec3::Z, Vec3::X, TransportMode::Radiance).is_none(), "grazing fixed direction");
+}
+
+/// The BSDF of a reference material with the shading normal equal to the geometric one.
+fn reference_bsdf(material: &ReferenceMaterial, normal: Vec3, fixed: Vec3, mode: TransportMode) -> Option<Bsdf> {
+    Bsdf::new(&Material::from(*material), &ShadingPoint::flat(normal), fixed, mode)
 }

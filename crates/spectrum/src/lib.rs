@@ -68,8 +68,22 @@ impl Rgb {
         self.r.is_finite() && self.g.is_finite() && self.b.is_finite()
     }
 
-    /// As an array `[r, g, b]`.
-    #[inline]
+    /// Per-channel maximum.
+    pub fn max(self, o: Rgb) -> Rgb {
+        Rgb::new(self.r.max(o.r), self.g.max(o.g), self.b.max(o.b))
+    }
+
+    /// Per-channel minimum.
+    pub fn min(self, o: Rgb) -> Rgb {
+        Rgb::new(self.r.min(o.r), self.g.min(o.g), self.b.min(o.b))
+    }
+
+    /// Applies `f` to every channel.
+    pub fn map(self, f: impl Fn(f32) -> f32) -> Rgb {
+        Rgb::new(f(self.r), f(self.g), f(self.b))
+    }
+
+    /// The channels as an array.
     pub fn to_array(self) -> [f32; 3] {
         [self.r, self.g, self.b]
     }

@@ -72,7 +72,8 @@ pub fn trace_camera_path(
         {
             out.add(Family::EmitterHit, path.throughput * emitted.radiance * weight);
         }
-        let Some(bsdf) = Bsdf::new(scene.material(&hit), hit.normal, -direction, TransportMode::Radiance) else {
+        let Some(bsdf) = Bsdf::new(scene.material(&hit), &hit.shading_point(), -direction, TransportMode::Radiance)
+        else {
             break;
         };
         if path.path_length >= it.max_length {

@@ -44,7 +44,9 @@ pub fn trace_light_path(
 
     while let Some(hit) = scene.intersect(&path.ray) {
         let fixed = -path.ray.direction;
-        let Some(bsdf) = Bsdf::new(scene.material(&hit), hit.normal, fixed, TransportMode::Importance) else { break };
+        let Some(bsdf) = Bsdf::new(scene.material(&hit), &hit.shading_point(), fixed, TransportMode::Importance) else {
+            break;
+        };
         let distance_squared = path.arrival_distance_squared(hit.distance);
         path.mis.arrive(distance_squared, bsdf.cos_fixed());
 
@@ -57,6 +59,8 @@ pub fn trace_light_path(
                     path_length: path.path_length,
                     material: hit.material,
                     normal: hit.normal,
+                    shading_normal: hit.shading_normal,
+                    uv: hit.uv,
                     fixed,
                     continuation: bsdf.continuation_probability(),
                 });

@@ -3,13 +3,13 @@
 //! need — position, throughput, MIS quantities — and the data to rebuild its BSDF (material,
 //! normal, fixed direction), never a full BSDF.
 
-use math::Vec3;
-use scene::{Bsdf, Scene, TransportMode};
+use math::{Vec2, Vec3};
+use scene::{Bsdf, Scene, ShadingPoint, TransportMode};
 use spectrum::Rgb;
 
 use super::mis::SubPathMis;
 
-/// A stored light sub-path vertex (80 bytes).
+/// A stored light sub-path vertex (100 bytes).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightVertex {
     /// Position on the surface.
@@ -25,6 +25,10 @@ pub struct LightVertex {
     pub material: u32,
     /// Geometric normal.
     pub normal: Vec3,
+    /// Shading normal.
+    pub shading_normal: Vec3,
+    /// Texture coordinates.
+    pub uv: Vec2,
     /// Unit direction towards the previous vertex (the BSDF's fixed direction).
     pub fixed: Vec3,
     /// Russian-roulette continuation probability of the vertex's BSDF.
@@ -35,7 +39,8 @@ impl LightVertex {
     /// Rebuilds the vertex's BSDF (importance transport).
     #[inline]
     pub fn bsdf(&self, scene: &Scene) -> Option<Bsdf> {
-        Bsdf::new(&scene.materials[self.material as usize], self.normal, self.fixed, TransportMode::Importance)
+        let point = ShadingPoint { geometric_normal: self.normal, shading_normal: self.shading_normal, uv: self.uv };
+        Bsdf::new(&scene.materials[self.material as usize], &point, self.fixed, TransportMode::Importance)
     }
 }
 

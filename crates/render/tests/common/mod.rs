@@ -9,7 +9,7 @@ use render::driver::{Budget, Renderer};
 use render::{Algorithm, RenderSettings};
 use scene::light::AreaLight;
 use scene::shape::{Shape, Triangle};
-use scene::{Bsdf, Camera, Light, Material, Primitive, Scene, TransportMode};
+use scene::{Bsdf, Camera, Light, Material, Primitive, ReferenceMaterial, Scene, TransportMode};
 use spectrum::Rgb;
 use testkit::MeanVar;
 
@@ -157,8 +157,12 @@ pub fn block_views(scene: &Scene, block: u32) -> Vec<BlockView> {
                                 view.emitter_or_background = true;
                             }
                             view.clearance = view.clearance.min(clearance(scene, hit.position, hit.primitive as usize));
-                            let bsdf =
-                                Bsdf::new(scene.material(&hit), hit.normal, -ray.direction, TransportMode::Radiance);
+                            let bsdf = Bsdf::new(
+                                scene.material(&hit),
+                                &hit.shading_point(),
+                                -ray.direction,
+                                TransportMode::Radiance,
+                            );
                             if bsdf.is_some_and(|b| b.is_delta()) {
                                 view.specular = true;
                             }
@@ -191,7 +195,7 @@ pub fn select(
 /// A closed cube `[-1, 1]³` whose inner faces all emit `emission` and reflect diffusely with
 /// `albedo`, seen from inside by a `resolution²` camera.
 pub fn furnace(emission: f32, albedo: f32, resolution: u32) -> Scene {
-    furnace_with(emission, Material::diffuse(Rgb::splat(albedo)), resolution)
+    furnace_with(emission, ReferenceMaterial::diffuse(Rgb::splat(albedo)).into(), resolution)
 }
 
 /// The furnace cube with every face made of `material`.

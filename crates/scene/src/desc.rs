@@ -1,0 +1,281 @@
+//! Scene descriptions: the plain data a scene file loader produces (Mitsuba 3 XML, pbrt-v4) and
+//! [`crate::Scene::from_description`] turns into a renderable scene.
+//!
+//! Everything here is in world space and already resolved: transforms applied, references
+//! replaced by indices, files read, parameters substituted. The loaders live in the `io` crate;
+//! this crate never touches the file system.
+//!
+//! Units: lengths in scene units, angles in degrees where the field name says so, radiance in
+//! W·m⁻²·sr⁻¹ (linear RGB), intensity in W·sr⁻¹, irradiance in W·m⁻².
+
+use std::sync::Arc;
+
+use math::{Vec2, Vec3};
+use spectrum::Rgb;
+
+use crate::material::Material;
+
+/// A linear-RGB image used as a texture or an environment map. Row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureImage {
+    /// Width in pixels (≥ 1).
+    pub width: u32,
+    /// Height in pixels (≥ 1).
+    pub height: u32,
+    /// `width × height` linear RGB values (sRGB-encoded files are decoded by the loader).
+    pub pixels: Vec<Rgb>,
+}
+
+impl TextureImage {
+    /// The pixel at column `x`, row `y` (row 0 at the top).
+    #[inline]
+    pub fn pixel(&self, x: u32, y: u32) -> Rgb {
+        self.pixels[(y * self.width + x) as usize]
+    }
+}
+
+/// A 2D affine map of texture coordinates, `uv' = m · uv + t` (Mitsuba's `to_uv`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    /// Columns of the 2×2 linear part.
+    pub columns: [Vec2; 2],
+    /// Translation.
+    pub translation: Vec2,
+}
+
+impl UvTransform {
+    /// The identity.
+    pub const IDENTITY: UvTransform =
+        UvTransform { columns: [Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0)], translation: Vec2::ZERO };
+
+    /// Applies the map.
+    #[inline]
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        self.columns[0] * uv.x + self.columns[1] * uv.y + self.translation
+    }
+}
+
+/// The geometry of a shape, in world space.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Geometry {
+    /// A triangle mesh.
+    Mesh(MeshData),
+    /// An analytic sphere; its geometric normal points outward (inward when `flip_normals`).
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius (> 0).
+        radius: f32,
+        /// Normals point inward (Mitsuba's `flip_normals`).
+        flip_normals: bool,
+    },
+    /// An analytic disc: the unit disc `x² + y² ≤ 1, z = 0` mapped by `center + x·axis_u +
+    /// y·axis_v`. Its geometric normal is `normalize(axis_u × axis_v)` (flipped when
+    /// `flip_normals`). Non-orthogonal or unequal axes give an ellipse.
+    Disk {
+        /// Centre.
+        center: Vec3,
+        /// Image of the local x axis (its length is the radius along it).
+        axis_u: Vec3,
+        /// Image of the local y axis.
+        axis_v: Vec3,
+        /// Flip the normal.
+        flip_normals: bool,
+    },
+}
+
+/// A triangle mesh in world space.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshData {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals (unit length), empty when the mesh has none. Triangles then
+    /// shade with their geometric normal.
+    pub normals: Vec<Vec3>,
+    /// Per-vertex texture coordinates, empty when the mesh has none.
+    pub uvs: Vec<Vec2>,
+    /// Vertex indices of each triangle; the geometric normal follows the right-hand rule
+    /// `(p1 − p0) × (p2 − p0)`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl MeshData {
+    /// Checks indices and attribute counts; returns a message naming the first problem.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.positions.len();
+        if !self.normals.is_empty() && self.normals.len() != n {
+            return Err(format!("{} normals for {} vertices", self.normals.len(), n));
+        }
+        if !self.uvs.is_empty() && self.uvs.len() != n {
+            return Err(format!("{} texture coordinates for {} vertices", self.uvs.len(), n));
+        }
+        if let Some((i, t)) = self.triangles.iter().enumerate().find(|(_, t)| t.iter().any(|&v| v as usize >= n)) {
+            return Err(format!("triangle {i} refers to vertex {:?}, but there are {n} vertices", t));
+        }
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(format!("vertex {i} has a non-finite position"));
+        }
+        Ok(())
+    }
+}
+
+/// A shape with its material and, when it emits, its emitted radiance.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeDesc {
+    /// Name for messages (the file's id, or the shape type and index).
+    pub name: String,
+    /// Geometry in world space.
+    pub geometry: Geometry,
+    /// Index into [`SceneDescription::materials`].
+    pub material: u32,
+    /// Radiance emitted from the front side (the side the geometric normal points to), if the
+    /// shape is an area emitter. Emitters are one-sided, as in Mitsuba.
+    pub emission: Option<Rgb>,
+}
+
+/// A light that is not attached to a shape.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LightDesc {
+    /// Isotropic point light.
+    Point {
+        /// Position.
+        position: Vec3,
+        /// Radiant intensity (W/sr).
+        intensity: Rgb,
+    },
+    /// Spot light at `position` shining along `direction`: full intensity within
+    /// `beam_width_degrees` of the axis, falling smoothly to zero at `cutoff_degrees`
+    /// (Mitsuba's `spot`: both angles are half-angles from the axis).
+    Spot {
+        /// Position.
+        position: Vec3,
+        /// Unit axis.
+        direction: Vec3,
+        /// Intensity on the axis (W/sr).
+        intensity: Rgb,
+        /// Half-angle where the falloff ends (degrees).
+        cutoff_degrees: f32,
+        /// Half-angle where the falloff begins (degrees, ≤ cutoff).
+        beam_width_degrees: f32,
+    },
+    /// Directional light travelling along `direction`.
+    Directional {
+        /// Unit direction of travel.
+        direction: Vec3,
+        /// Irradiance on a perpendicular surface (W/m²).
+        irradiance: Rgb,
+    },
+    /// Constant environment radiance from every direction.
+    Constant {
+        /// Radiance.
+        radiance: Rgb,
+    },
+    /// An image-based environment (equirectangular / latitude–longitude, Mitsuba's `envmap`
+    /// convention): the world direction `d` is looked up at local direction `v = R⁻¹·d` with
+    /// `u = atan2(v.x, −v.z)/(2π)` (wrapped into [0,1)) and `v = acos(v.y)/π`, row 0 at the top
+    /// (`v.y = 1`).
+    EnvMap {
+        /// The radiance image.
+        image: Arc<TextureImage>,
+        /// Factor applied to every pixel.
+        scale: f32,
+        /// Rotation from the map's local frame to world space (columns are the images of the
+        /// local x, y, z axes; orthonormal).
+        to_world: [Vec3; 3],
+    },
+}
+
+/// The camera's projection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Pinhole perspective.
+    Perspective {
+        /// Full horizontal field of view (degrees).
+        horizontal_fov_degrees: f32,
+    },
+    /// Thin lens: perspective with depth of field.
+    ThinLens {
+        /// Full horizontal field of view (degrees).
+        horizontal_fov_degrees: f32,
+        /// Radius of the lens aperture (scene units, > 0).
+        aperture_radius: f32,
+        /// Distance of the plane in focus along the viewing direction (scene units, > 0).
+        focus_distance: f32,
+    },
+    /// Orthographic: parallel rays along the viewing direction from a rectangle of
+    /// `width × height` scene units centred on the camera position.
+    Orthographic {
+        /// Width of the visible rectangle (scene units); the height follows from the aspect.
+        width: f32,
+    },
+}
+
+/// A camera in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraDesc {
+    /// Position of the eye (pinhole, lens centre, or centre of the orthographic rectangle).
+    pub position: Vec3,
+    /// Unit viewing direction.
+    pub forward: Vec3,
+    /// Unit vector pointing up in the image (orthogonal to `forward`).
+    pub up: Vec3,
+    /// Unit vector pointing right in the image (orthogonal to both; its handedness is kept
+    /// as the file gives it, so mirrored cameras stay mirrored).
+    pub right: Vec3,
+    /// The projection.
+    pub projection: Projection,
+}
+
+/// The pixel reconstruction filter (Mitsuba's `rfilter`, pbrt's `Film` filter).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilterDesc {
+    /// Box of half-width 0.5 pixel (each sample counts for its own pixel).
+    Box,
+    /// Tent (triangle) of half-width `radius` pixels, separable.
+    Tent {
+        /// Half-width in pixels (Mitsuba's default 1).
+        radius: f32,
+    },
+    /// Gaussian with standard deviation `stddev` pixels, truncated at `radius` pixels and
+    /// shifted to reach zero there (`max(0, g(x) − g(radius))`), separable. Mitsuba's default
+    /// is `stddev` 0.5, `radius` 4·stddev = 2.
+    Gaussian {
+        /// Standard deviation in pixels.
+        stddev: f32,
+        /// Truncation radius in pixels.
+        radius: f32,
+    },
+}
+
+/// The film.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilmDesc {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Reconstruction filter.
+    pub filter: FilterDesc,
+}
+
+/// A complete scene description.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneDescription {
+    /// Name for messages and reports (usually the file name).
+    pub name: String,
+    /// The camera.
+    pub camera: CameraDesc,
+    /// The film.
+    pub film: FilmDesc,
+    /// Materials, referenced by index from the shapes.
+    pub materials: Vec<Material>,
+    /// Shapes (area emitters included).
+    pub shapes: Vec<ShapeDesc>,
+    /// Lights not attached to shapes. At most one environment (`Constant` or `EnvMap`).
+    pub lights: Vec<LightDesc>,
+    /// Maximum path length in segments from the file's integrator (`None` = no limit given or
+    /// unlimited).
+    pub max_path_length: Option<u32>,
+    /// Warnings the loader wants the user to see (skipped optional attributes).
+    pub warnings: Vec<String>,
+}
