@@ -17,8 +17,10 @@ use scene::Film;
 /// The settings a checkpoint records (as the command line spells them).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Recorded {
-    /// Cornell scene mask.
+    /// Cornell scene mask (built-in scenes).
     pub mask: u32,
+    /// Scene file (instead of the mask) and its `-D` parameters.
+    pub scene_file: Option<(PathBuf, Vec<String>)>,
     /// Algorithm name.
     pub algorithm: String,
     /// Image width and height.
@@ -47,6 +49,12 @@ pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
         writeln!(out, "{MAGIC}")?;
         let r = recorded;
         writeln!(out, "mask={}", r.mask)?;
+        if let Some((file, defines)) = &r.scene_file {
+            writeln!(out, "scene_file={}", file.display())?;
+            for define in defines {
+                writeln!(out, "define={define}")?;
+            }
+        }
         writeln!(out, "algorithm={}", r.algorithm)?;
         writeln!(out, "resolution={}x{}", r.resolution.0, r.resolution.1)?;
         writeln!(out, "max_length={}", r.max_length)?;
@@ -81,10 +89,15 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
         bail!(bad(format!("the first line is not '{MAGIC}'")));
     }
     let mut fields = BTreeMap::new();
+    let mut defines = Vec::new();
     for (number, line) in lines.enumerate() {
         let (key, value) =
             line.split_once('=').ok_or_else(|| bad(format!("line {}: expected key=value", number + 2)))?;
-        fields.insert(key, value);
+        if key == "define" {
+            defines.push(value.to_string());
+        } else {
+            fields.insert(key, value);
+        }
     }
     fn field<T: std::str::FromStr>(fields: &BTreeMap<&str, &str>, key: &str) -> Option<T> {
         fields.get(key)?.parse().ok()
@@ -97,6 +110,7 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
         .ok_or_else(|| missing("resolution"))?;
     let recorded = Recorded {
         mask: field(&fields, "mask").ok_or_else(|| missing("mask"))?,
+        scene_file: fields.get("scene_file").map(|f| (PathBuf::from(f), defines)),
         algorithm: field(&fields, "algorithm").ok_or_else(|| missing("algorithm"))?,
         resolution,
         max_length: field(&fields, "max_length").ok_or_else(|| missing("max_length"))?,
@@ -134,8 +148,9 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("vcm-checkpoint-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("a.ckpt");
-        let recorded = Recorded {
+        let mut recorded = Recorded {
             mask: 450,
+            scene_file: None,
             algorithm: "vcm".into(),
             resolution: (3, 2),
             max_length: 7,
@@ -152,6 +167,10 @@ mod tests {
         let (back, film_back) = load(&path).unwrap();
         assert_eq!(back, recorded);
         assert_eq!(film_back.sums(), &sums[..]);
+        // A scene file with its parameters.
+        recorded.scene_file = Some((PathBuf::from("scenes/a b.xml"), vec!["spp=4".into(), "res=x=y".into()]));
+        save(&path, &recorded, &film).unwrap();
+        assert_eq!(load(&path).unwrap().0, recorded);
         assert_eq!(film_back.sum_squares(), &squares[..]);
         assert_eq!((film_back.iterations(), film_back.rejected_samples()), (17, 2));
         assert!(!dir.join("a.ckpt.tmp").exists(), "the temporary file is renamed");

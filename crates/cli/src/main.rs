@@ -8,7 +8,7 @@ mod compare;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -74,9 +74,13 @@ enum RadiusModeName {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// Scene: a built-in id (0-3) or name (see `vcm scenes`).
+    /// Scene: a built-in id (0-3) or name (see `vcm scenes`), or a scene file: Mitsuba 3 XML
+    /// (.xml) or pbrt-v4 (.pbrt).
     #[arg(long, default_value = "cornell-sun")]
     scene: String,
+    /// Set a scene-file parameter, overriding its <default> (Mitsuba: `$NAME`); repeatable.
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE")]
+    defines: Vec<String>,
     /// Build the Cornell box from a bit mask instead (0-511, see `vcm scenes`); overrides --scene.
     #[arg(long, value_name = "N")]
     scene_mask: Option<u32>,
@@ -89,12 +93,13 @@ struct RenderArgs {
     /// Render for this many seconds of wall-clock time instead.
     #[arg(long, short, value_name = "SECONDS")]
     time: Option<f64>,
-    /// Image size in pixels.
-    #[arg(long, short, value_name = "WxH", default_value = "512x512", value_parser = parse_resolution)]
-    resolution: (u32, u32),
-    /// Maximum path length in segments (camera segment included; 2 = direct lighting).
-    #[arg(long, value_name = "N", default_value_t = 10)]
-    max_length: u32,
+    /// Image size in pixels [default: the scene file's film, 512x512 for built-in scenes].
+    #[arg(long, short, value_name = "WxH", value_parser = parse_resolution)]
+    resolution: Option<(u32, u32)>,
+    /// Maximum path length in segments (camera segment included; 2 = direct lighting)
+    /// [default: the scene file's max_depth, 10 for built-in scenes].
+    #[arg(long, value_name = "N")]
+    max_length: Option<u32>,
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -179,22 +184,83 @@ fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// Resolves `--scene` to a Cornell mask.
-fn scene_mask(name: &str) -> Result<u32> {
+/// Where a scene comes from.
+#[derive(Clone, Debug, PartialEq)]
+enum SceneSource {
+    /// A built-in Cornell box.
+    Builtin(u32),
+    /// A scene file with its `-D NAME=VALUE` parameters.
+    File(PathBuf, Vec<String>),
+}
+
+/// Resolves `--scene`: a built-in id or name, or a scene file.
+fn scene_source(name: &str, defines: &[String]) -> Result<SceneSource> {
     if let Some(s) = BUILTIN_SCENES.iter().find(|s| s.name == name || s.id.to_string() == name) {
-        return Ok(s.mask);
+        if let Some(define) = defines.first() {
+            bail!("-D {define}: parameters apply to scene files, not to the built-in scene '{name}'");
+        }
+        return Ok(SceneSource::Builtin(s.mask));
     }
     let valid: Vec<String> = BUILTIN_SCENES.iter().map(|s| format!("{} ({})", s.id, s.name)).collect();
     if Path::new(name).extension().is_some() || name.contains('/') {
         if !Path::new(name).exists() {
             bail!("scene file '{name}' does not exist (built-in scenes: {})", valid.join(", "));
         }
-        bail!(
-            "cannot load '{name}': scene files are not supported yet (issue #4); built-in scenes: {}",
-            valid.join(", ")
-        );
+        return Ok(SceneSource::File(PathBuf::from(name), defines.to_vec()));
     }
     bail!("unknown scene '{name}'; valid scenes: {}", valid.join(", "))
+}
+
+/// A loaded scene with the defaults its source implies.
+struct LoadedScene {
+    scene: Scene,
+    /// Path length from the file's integrator (`None`: not given or unlimited).
+    file_max_length: Option<u32>,
+}
+
+/// Path length used when a scene file asks for unlimited paths (Russian roulette ends them
+/// long before).
+const UNLIMITED_PATH_LENGTH: u32 = 100;
+
+/// Loads or builds the scene; `resolution` overrides the file's film.
+fn load_scene(source: &SceneSource, resolution: Option<(u32, u32)>, quiet: bool) -> Result<LoadedScene> {
+    match source {
+        SceneSource::Builtin(mask) => {
+            Ok(LoadedScene { scene: build_scene(*mask, resolution.unwrap_or((512, 512)))?, file_max_length: None })
+        }
+        SceneSource::File(path, defines) => {
+            let pairs = defines
+                .iter()
+                .map(|d| match d.split_once('=') {
+                    Some((name, value)) if !name.is_empty() => Ok((name.to_string(), value.to_string())),
+                    _ => bail!("-D '{d}': expected NAME=VALUE"),
+                })
+                .collect::<Result<Vec<_>>>()?;
+            let start = Instant::now();
+            let desc = io::load_scene(path, &pairs)?;
+            for warning in &desc.warnings {
+                eprintln!("warning: {warning}");
+            }
+            let (scene, report) =
+                Scene::from_description(&desc, resolution).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            if !quiet {
+                eprintln!(
+                    "loaded {} in {:.2} s: {} triangles, {} analytic shapes, {} lights{}",
+                    path.display(),
+                    start.elapsed().as_secs_f64(),
+                    report.triangles,
+                    report.analytic_shapes,
+                    report.lights,
+                    if report.degenerate_triangles > 0 {
+                        format!(", {} degenerate triangles dropped", report.degenerate_triangles)
+                    } else {
+                        String::new()
+                    }
+                );
+            }
+            Ok(LoadedScene { scene, file_max_length: Some(desc.max_path_length.unwrap_or(UNLIMITED_PATH_LENGTH)) })
+        }
+    }
 }
 
 fn build_scene(mask: u32, (width, height): (u32, u32)) -> Result<Scene> {
@@ -234,11 +300,18 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
     let resumed = match &args.resume {
         Some(path) => {
             let (recorded, film) = checkpoint::load(path)?;
-            args.scene_mask = Some(recorded.mask);
+            match &recorded.scene_file {
+                Some((file, defines)) => {
+                    args.scene = file.display().to_string();
+                    args.defines = defines.clone();
+                    args.scene_mask = None;
+                }
+                None => args.scene_mask = Some(recorded.mask),
+            }
             args.algorithm = AlgorithmName::from_str(&recorded.algorithm, false)
                 .map_err(|_| anyhow::anyhow!("unknown algorithm '{}' in '{}'", recorded.algorithm, path.display()))?;
-            args.resolution = recorded.resolution;
-            args.max_length = recorded.max_length;
+            args.resolution = Some(recorded.resolution);
+            args.max_length = Some(recorded.max_length);
             args.seed = recorded.seed;
             args.radius_factor = recorded.radius_factor;
             args.radius_alpha = recorded.radius_alpha;
@@ -260,11 +333,11 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
     if !(args.radius_alpha > 0.0 && args.radius_alpha <= 1.0) {
         bail!("--radius-alpha must be in (0, 1], got {}", args.radius_alpha);
     }
-    let mask = match args.scene_mask {
-        Some(mask) => mask,
-        None => scene_mask(&args.scene)?,
+    let source = match args.scene_mask {
+        Some(mask) => SceneSource::Builtin(mask),
+        None => scene_source(&args.scene, &args.defines)?,
     };
-    if args.max_length == 0 {
+    if args.max_length == Some(0) {
         bail!("--max-length must be at least 1");
     }
     if !(args.checkpoint_every.is_finite() && args.checkpoint_every >= 0.0) {
@@ -303,11 +376,13 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create technique directory '{}'", dir.display()))?;
     }
-    let scene = build_scene(mask, args.resolution)?;
+    let LoadedScene { scene, file_max_length } = load_scene(&source, args.resolution, args.quiet)?;
+    let max_length = args.max_length.or(file_max_length).unwrap_or(10);
+    let resolution = (scene.camera.width, scene.camera.height);
     let settings = RenderSettings {
         algorithm,
         budget,
-        max_length: args.max_length,
+        max_length,
         seed: args.seed,
         threads: args.threads,
         progress: !args.quiet,
@@ -320,10 +395,17 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
         memory_efficient: args.memory_efficient,
     };
     let recorded = checkpoint::Recorded {
-        mask,
+        mask: match source {
+            SceneSource::Builtin(mask) => mask,
+            SceneSource::File(..) => 0,
+        },
+        scene_file: match &source {
+            SceneSource::Builtin(_) => None,
+            SceneSource::File(path, defines) => Some((path.clone(), defines.clone())),
+        },
         algorithm: algorithm.name().to_string(),
-        resolution: args.resolution,
-        max_length: args.max_length,
+        resolution,
+        max_length,
         seed: args.seed,
         radius_factor: args.radius_factor,
         radius_alpha: args.radius_alpha,
@@ -439,21 +521,26 @@ fn run_scenes() {
 fn run_bench(args: BenchArgs) -> Result<()> {
     use AlgorithmName::*;
     let algorithms = if args.algorithm.is_empty() { vec![Pt, Lt, Ppm, Bpm, Bpt, Vcm] } else { args.algorithm };
-    let masks: Vec<u32> = if args.scene.is_empty() {
-        BUILTIN_SCENES.iter().map(|s| s.mask).collect()
+    let sources: Vec<SceneSource> = if args.scene.is_empty() {
+        BUILTIN_SCENES.iter().map(|s| SceneSource::Builtin(s.mask)).collect()
     } else {
-        args.scene.iter().map(|s| scene_mask(s)).collect::<Result<_>>()?
+        args.scene.iter().map(|s| scene_source(s, &[])).collect::<Result<_>>()?
     };
     println!(
         "{:<22} {:>9} {:>13} {:>11} {:>15} {:>9} {:>8}  phases of the last iteration (ms)",
         "scene", "algorithm", "ms/iteration", "CPU-s/iter", "light vertices", "B/vertex", "threads"
     );
-    for mask in masks {
-        let scene = build_scene(mask, args.resolution)?;
+    for source in sources {
+        let LoadedScene { scene, file_max_length } = load_scene(&source, Some(args.resolution), true)?;
         for name in &algorithms {
             let algorithm = name.algorithm();
-            let settings =
-                |budget| RenderSettings { algorithm, budget, threads: args.threads, ..RenderSettings::default() };
+            let settings = |budget| RenderSettings {
+                algorithm,
+                budget,
+                threads: args.threads,
+                max_length: file_max_length.unwrap_or(RenderSettings::default().max_length),
+                ..RenderSettings::default()
+            };
             render::render(&scene, &settings(Budget::Iterations(1))).map_err(anyhow::Error::msg)?;
             let cpu_before = process_cpu_seconds();
             let result =

@@ -39,7 +39,6 @@ impl PathTracer {
 
 fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee: bool) -> Rgb {
     let sphere = &scene.bounding_sphere;
-    let pick_probability = scene.light_pick_probability();
     let mut ray = camera_ray;
     let mut throughput = Rgb::WHITE;
     let mut result = Rgb::BLACK;
@@ -54,13 +53,13 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
     loop {
         let Some(hit) = scene.intersect(&ray) else {
             // The ray leaves the scene: environment light.
-            if let Some(light) = scene.background_light()
-                && let Some(emitted) = light.radiance_on_hit(ray.direction, sphere)
+            if let Some(index) = scene.background
+                && let Some(emitted) = scene.lights[index as usize].radiance_on_hit(ray.direction, sphere)
             {
                 let weight = if last_specular || !nee {
                     1.0
                 } else {
-                    balance_heuristic(last_pdf, emitted.direct_pdf.0 * pick_probability)
+                    balance_heuristic(last_pdf, emitted.direct_pdf.0 * scene.light_pick_probability(index))
                 };
                 result += throughput * emitted.radiance * weight;
             }
@@ -76,7 +75,7 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
                 } else {
                     let distance = hit.distance + origin_offset;
                     let direct_pdf = emitted.direct_pdf.to_solid_angle(distance * distance, emitted.cos_at_light);
-                    balance_heuristic(last_pdf, direct_pdf.0 * pick_probability)
+                    balance_heuristic(last_pdf, direct_pdf.0 * scene.light_pick_probability(light_index))
                 };
                 result += throughput * emitted.radiance * weight;
             }

@@ -129,10 +129,8 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
 
     let mut primitives = Vec::new();
     let mut lights = Vec::new();
-    let triangle = |p0: Vec3, p1: Vec3, p2: Vec3, material: u32| Primitive {
-        shape: Shape::Triangle(Triangle::new(p0, p1, p2)),
-        material,
-        light: None,
+    let triangle = |p0: Vec3, p1: Vec3, p2: Vec3, material: u32| {
+        Primitive::new(Shape::Triangle(Triangle::new(p0, p1, p2)), material, None)
     };
 
     primitives.push(triangle(c[0], c[4], c[5], floor_material));
@@ -162,10 +160,8 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
     let small_z = floor_z + small_radius;
     let floor_mean = (c[0] + c[4] + c[5] + c[1]) * 0.25;
     let large_center = v(floor_mean.x, floor_mean.y, floor_z + large_radius);
-    let sphere = |center: Vec3, radius: f32, material: u32| Primitive {
-        shape: Shape::Sphere(Sphere { center, radius }),
-        material,
-        light: None,
+    let sphere = |center: Vec3, radius: f32, material: u32| {
+        Primitive::new(Shape::Sphere(Sphere { center, radius }), material, None)
     };
     if has(LARGE_MIRROR_SPHERE) {
         primitives.push(sphere(large_center, large_radius, MIRROR));
@@ -193,7 +189,7 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
             v(-0.25, -0.25, 1.28002),
         ];
         let mut light_box = |p0: Vec3, p1: Vec3, p2: Vec3, material: u32| {
-            primitives.push(Primitive { shape: Shape::Triangle(Triangle::new(p0, p1, p2)), material, light: None })
+            primitives.push(Primitive::new(Shape::Triangle(Triangle::new(p0, p1, p2)), material, None))
         };
         light_box(l[0], l[2], l[1], WHITE);
         light_box(l[2], l[0], l[3], WHITE);
@@ -270,7 +266,7 @@ mod tests {
             .iter()
             .filter_map(|p| match p.shape {
                 Shape::Sphere(s) => Some((s.center, s.radius, p.material)),
-                Shape::Triangle(_) => None,
+                Shape::Triangle(_) | Shape::Disk(_) => None,
             })
             .collect()
     }

@@ -4,6 +4,7 @@
 //! This crate does not know about integrators or file formats.
 
 pub mod accel;
+pub mod build;
 pub mod camera;
 pub mod cornell;
 pub mod desc;

@@ -1,7 +1,7 @@
 //! The scene container: primitives with their materials and emitters, the lights, the camera,
 //! the bounding sphere and the BVH, with the two ray queries every integrator uses.
 
-use math::{Aabb, RAY_EPSILON, Ray, Vec2, Vec3};
+use math::{Aabb, Distribution1D, PI, RAY_EPSILON, Ray, Vec2, Vec3};
 
 use crate::accel::Bvh;
 use crate::camera::Camera;
@@ -18,6 +18,33 @@ pub struct Primitive {
     pub material: u32,
     /// Index into [`Scene::lights`] when the primitive is an area emitter.
     pub light: Option<u32>,
+    /// Index into [`Scene::attributes`], or [`NO_ATTRIBUTES`].
+    pub attributes: u32,
+}
+
+impl Primitive {
+    /// A primitive without extra surface attributes.
+    pub fn new(shape: Shape, material: u32, light: Option<u32>) -> Self {
+        Self { shape, material, light, attributes: NO_ATTRIBUTES }
+    }
+}
+
+/// [`Primitive::attributes`] of a primitive that has none.
+pub const NO_ATTRIBUTES: u32 = u32::MAX;
+
+/// Surface attributes beyond the geometry: per-vertex shading normals and texture coordinates
+/// of mesh triangles, or the inward orientation of a sphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SurfaceAttributes {
+    /// Vertex attributes of a triangle, in the order of its vertices.
+    Triangle {
+        /// Unit shading normals at the vertices (interpolated and renormalised at a hit).
+        normals: Option<[Vec3; 3]>,
+        /// Texture coordinates at the vertices.
+        uvs: Option<[Vec2; 3]>,
+    },
+    /// The geometric normal points inward (a sphere with flipped normals).
+    FlippedNormal,
 }
 
 /// A ray–surface intersection.
@@ -66,6 +93,10 @@ pub struct Scene {
     pub bounding_sphere: BoundingSphere,
     /// Index of the environment light, seen by rays that leave the scene.
     pub background: Option<u32>,
+    /// Surface attributes referenced by [`Primitive::attributes`].
+    pub attributes: Vec<SurfaceAttributes>,
+    /// Light selection: proportional to each light's emitted power.
+    light_selection: Option<Distribution1D>,
     bvh: Bvh,
 }
 
@@ -83,16 +114,29 @@ impl Scene {
         let (center, radius) = if scene_box.is_empty() { (Vec3::ZERO, 1.0) } else { scene_box.bounding_sphere() };
         let background = lights.iter().position(|l| matches!(l, Light::Background(_))).map(|i| i as u32);
         let bvh = Bvh::build(&bounds);
+        let bounding_sphere = BoundingSphere { center, radius };
+        let powers: Vec<f32> = lights.iter().map(|l| light_power(l, &bounding_sphere)).collect();
+        // Lights of zero power are never picked; if every light has zero power (or there are
+        // none), nothing is.
+        let light_selection = Distribution1D::new(&powers);
         Self {
             name: name.into(),
             primitives,
             materials,
             lights,
             camera,
-            bounding_sphere: BoundingSphere { center, radius },
+            bounding_sphere,
             background,
+            attributes: Vec::new(),
+            light_selection,
             bvh,
         }
+    }
+
+    /// Sets the surface attributes that primitives refer to.
+    pub fn with_attributes(mut self, attributes: Vec<SurfaceAttributes>) -> Self {
+        self.attributes = attributes;
+        self
     }
 
     /// Nearest intersection of `ray` (any distance > 0).
@@ -103,12 +147,41 @@ impl Scene {
             .closest_hit(ray, f32::INFINITY, |i, r, t_max| self.primitives[i as usize].shape.intersect(r, t_max))?;
         let primitive = &self.primitives[index as usize];
         let position = ray.at(distance);
-        let normal = primitive.shape.normal_at(position);
+        let mut normal = primitive.shape.normal_at(position);
+        let mut shading_normal = normal;
+        let mut uv = Vec2::ZERO;
+        match (&primitive.shape, self.attributes.get(primitive.attributes as usize)) {
+            (Shape::Triangle(t), Some(SurfaceAttributes::Triangle { normals, uvs })) => {
+                let (b1, b2) = t.barycentrics(position);
+                let b0 = 1.0 - b1 - b2;
+                if let Some(n) = normals {
+                    let interpolated = n[0] * b0 + n[1] * b1 + n[2] * b2;
+                    if interpolated.length_squared() > 1e-12 {
+                        shading_normal = interpolated.normalize();
+                    }
+                }
+                if let Some(t) = uvs {
+                    uv = t[0] * b0 + t[1] * b1 + t[2] * b2;
+                }
+            }
+            (Shape::Triangle(t), _) => {
+                let (b1, b2) = t.barycentrics(position);
+                uv = Vec2::new(b1, b2);
+            }
+            (Shape::Sphere(s), attributes) => {
+                uv = s.uv_at(position);
+                if matches!(attributes, Some(SurfaceAttributes::FlippedNormal)) {
+                    normal = -normal;
+                    shading_normal = normal;
+                }
+            }
+            (Shape::Disk(d), _) => uv = d.uv_at(position),
+        }
         Some(SurfaceHit {
             position,
             normal,
-            shading_normal: normal,
-            uv: Vec2::ZERO,
+            shading_normal,
+            uv,
             distance,
             primitive: index,
             material: primitive.material,
@@ -128,19 +201,19 @@ impl Scene {
         self.bvh.any_hit(&ray, t_max, |i, r, t| self.primitives[i as usize].shape.intersect(r, t).is_some())
     }
 
-    /// Picks a light uniformly with `u ∈ [0,1)`: its index, the light, and the probability.
+    /// Picks a light in proportion to its emitted power with `u ∈ [0,1)`: its index, the
+    /// light, and the probability of picking it.
+    #[inline]
     pub fn pick_light(&self, u: f32) -> Option<(u32, &Light, f32)> {
-        if self.lights.is_empty() {
-            return None;
-        }
-        let n = self.lights.len();
-        let index = ((u * n as f32) as usize).min(n - 1);
-        Some((index as u32, &self.lights[index], 1.0 / n as f32))
+        let selection = self.light_selection.as_ref()?;
+        let (index, probability) = selection.sample(u);
+        Some((index as u32, &self.lights[index], probability))
     }
 
-    /// Probability with which [`Scene::pick_light`] picks any given light.
-    pub fn light_pick_probability(&self) -> f32 {
-        if self.lights.is_empty() { 0.0 } else { 1.0 / self.lights.len() as f32 }
+    /// Probability with which [`Scene::pick_light`] picks light `index`.
+    #[inline]
+    pub fn light_pick_probability(&self, index: u32) -> f32 {
+        self.light_selection.as_ref().map_or(0.0, |s| s.probability(index as usize))
     }
 
     /// The environment light, if any.
@@ -151,5 +224,18 @@ impl Scene {
     /// The material of a hit.
     pub fn material(&self, hit: &SurfaceHit) -> &Material {
         &self.materials[hit.material as usize]
+    }
+}
+
+/// Luminance of the power a light emits (W), for power-proportional light selection. Infinite
+/// lights count the power crossing the bounding sphere's disc, `π R² · π L` for a constant
+/// environment.
+fn light_power(light: &Light, sphere: &BoundingSphere) -> f32 {
+    let disc = PI * sphere.radius * sphere.radius;
+    match light {
+        Light::Area(l) => PI * l.triangle.area() * l.radiance.luminance(),
+        Light::Point(l) => 4.0 * PI * l.intensity.luminance(),
+        Light::Directional(l) => disc * l.irradiance.luminance(),
+        Light::Background(l) => disc * PI * l.radiance.luminance(),
     }
 }

@@ -4,7 +4,7 @@
 //! earlier hit only when it is strictly closer. Normals are *geometric* normals: for triangles
 //! `normalize((p1−p0) × (p2−p0))`, for spheres the outward normal.
 
-use math::{Aabb, Ray, Vec3};
+use math::{Aabb, PI, Ray, Vec2, Vec3};
 
 /// A triangle stored by its vertices (kept exactly as given) and its precomputed unit normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,6 +51,20 @@ impl Triangle {
     /// Area in square scene units.
     pub fn area(&self) -> f32 {
         0.5 * self.edge1().cross(self.edge2()).length()
+    }
+
+    /// Barycentric coordinates `(b1, b2)` of `point` (assumed to lie in the triangle's plane),
+    /// so that `point ≈ self.point(b1, b2)`.
+    #[inline]
+    pub fn barycentrics(&self, point: Vec3) -> (f32, f32) {
+        let (e1, e2, d) = (self.edge1(), self.edge2(), point - self.p0);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let (d1, d2) = (d.dot(e1), d.dot(e2));
+        let det = d11 * d22 - d12 * d12;
+        if det == 0.0 {
+            return (0.0, 0.0);
+        }
+        ((d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det)
     }
 
     /// Bounding box.
@@ -135,6 +149,97 @@ impl Sphere {
     }
 }
 
+impl Sphere {
+    /// Mitsuba's sphere parameterisation at a surface point: `u = φ/2π` (φ = atan2(y, x)
+    /// about the centre, in [0, 1)), `v = θ/π` (θ from +z), in world axes.
+    pub fn uv_at(&self, point: Vec3) -> Vec2 {
+        let d = (point - self.center) / self.radius;
+        let phi = d.y.atan2(d.x);
+        let u = if phi < 0.0 { phi + 2.0 * PI } else { phi } / (2.0 * PI);
+        Vec2::new(u, d.z.clamp(-1.0, 1.0).acos() / PI)
+    }
+}
+
+/// An analytic disc (or ellipse): the unit disc `x² + y² ≤ 1` mapped by
+/// `center + x·axis_u + y·axis_v`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Disk {
+    /// Centre.
+    pub center: Vec3,
+    /// Image of the local x axis.
+    pub axis_u: Vec3,
+    /// Image of the local y axis.
+    pub axis_v: Vec3,
+    /// Unit geometric normal (`±normalize(axis_u × axis_v)`).
+    pub normal: Vec3,
+    /// Dual basis: `x = dual_u · (p − center)`, `y = dual_v · (p − center)` for points in the
+    /// plane.
+    dual_u: Vec3,
+    dual_v: Vec3,
+}
+
+impl Disk {
+    /// The disc with the given axes; `flip` reverses the normal. `None` when the axes are
+    /// parallel or not finite.
+    pub fn new(center: Vec3, axis_u: Vec3, axis_v: Vec3, flip: bool) -> Option<Self> {
+        let cross = axis_u.cross(axis_v);
+        let len2 = cross.length_squared();
+        if !(len2 > 0.0) || !len2.is_finite() || !center.is_finite() {
+            return None;
+        }
+        // Dual vectors: dual_u ⟂ axis_v with dual_u·axis_u = 1, and vice versa.
+        let dual_u = axis_v.cross(cross) / len2;
+        let dual_v = cross.cross(axis_u) / len2;
+        let normal = cross.normalize();
+        Some(Self { center, axis_u, axis_v, normal: if flip { -normal } else { normal }, dual_u, dual_v })
+    }
+
+    /// Area in square scene units: `π |axis_u × axis_v|`.
+    pub fn area(&self) -> f32 {
+        PI * self.axis_u.cross(self.axis_v).length()
+    }
+
+    /// Bounding box.
+    pub fn bounds(&self) -> Aabb {
+        let extent = Vec3::new(
+            self.axis_u.x.hypot(self.axis_v.x),
+            self.axis_u.y.hypot(self.axis_v.y),
+            self.axis_u.z.hypot(self.axis_v.z),
+        );
+        Aabb::new(self.center - extent, self.center + extent)
+    }
+
+    /// Distance along `ray` to the intersection in `(0, t_max)`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
+        let denominator = ray.direction.dot(self.normal);
+        if denominator == 0.0 {
+            return None;
+        }
+        let t = (self.center - ray.origin).dot(self.normal) / denominator;
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
+        let d = ray.at(t) - self.center;
+        let (x, y) = (self.dual_u.dot(d), self.dual_v.dot(d));
+        (x * x + y * y <= 1.0).then_some(t)
+    }
+
+    /// Local polar texture coordinates: `u` = radius in [0, 1], `v` = angle / 2π in [0, 1).
+    pub fn uv_at(&self, point: Vec3) -> Vec2 {
+        let d = point - self.center;
+        let (x, y) = (self.dual_u.dot(d), self.dual_v.dot(d));
+        let phi = y.atan2(x);
+        Vec2::new((x * x + y * y).sqrt(), if phi < 0.0 { phi + 2.0 * PI } else { phi } / (2.0 * PI))
+    }
+
+    /// The point with local coordinates `(x, y)` on the unit disc.
+    #[inline]
+    pub fn point(&self, x: f32, y: f32) -> Vec3 {
+        self.center + self.axis_u * x + self.axis_v * y
+    }
+}
+
 /// A primitive of the scene. Closed set: matched exhaustively.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
@@ -142,6 +247,8 @@ pub enum Shape {
     Triangle(Triangle),
     /// An analytic sphere.
     Sphere(Sphere),
+    /// An analytic disc.
+    Disk(Disk),
 }
 
 impl Shape {
@@ -150,6 +257,7 @@ impl Shape {
         match self {
             Shape::Triangle(t) => t.bounds(),
             Shape::Sphere(s) => s.bounds(),
+            Shape::Disk(d) => d.bounds(),
         }
     }
 
@@ -159,6 +267,7 @@ impl Shape {
         match self {
             Shape::Triangle(t) => t.intersect(ray, t_max),
             Shape::Sphere(s) => s.intersect(ray, t_max),
+            Shape::Disk(d) => d.intersect(ray, t_max),
         }
     }
 
@@ -168,6 +277,7 @@ impl Shape {
         match self {
             Shape::Triangle(t) => t.normal,
             Shape::Sphere(s) => s.normal_at(point),
+            Shape::Disk(d) => d.normal,
         }
     }
 }
@@ -188,6 +298,31 @@ mod tests {
         let miss = Ray::new(Vec3::new(0.75, 0.75, 1.0), -Vec3::Z);
         assert_eq!(t.intersect(&miss, f32::INFINITY), None);
         assert!((t.area() - 0.5).abs() < 1e-7);
+    }
+
+    #[test]
+    fn disk_hits_inside_its_ellipse() {
+        let d = Disk::new(Vec3::new(0.0, 0.0, 1.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.5, 0.0), false).unwrap();
+        assert_eq!(d.normal, Vec3::Z);
+        assert!((d.area() - PI).abs() < 1e-6);
+        let hit = |x: f32, y: f32| d.intersect(&Ray::new(Vec3::new(x, y, 3.0), -Vec3::Z), f32::INFINITY);
+        assert_eq!(hit(1.9, 0.0), Some(2.0));
+        assert_eq!(hit(0.0, 0.45), Some(2.0));
+        assert_eq!(hit(0.0, 0.55), None);
+        assert_eq!(hit(1.5, 0.4), None, "outside the ellipse, inside its box");
+        assert!((d.uv_at(Vec3::new(1.0, 0.0, 1.0)) - Vec2::new(0.5, 0.0)).length() < 1e-6);
+        let b = d.bounds();
+        assert!((b.max - Vec3::new(2.0, 0.5, 1.0)).length() < 1e-6);
+        let flipped = Disk::new(Vec3::ZERO, Vec3::X, Vec3::Y, true).unwrap();
+        assert_eq!(flipped.normal, -Vec3::Z);
+        assert!(Disk::new(Vec3::ZERO, Vec3::X, Vec3::X, false).is_none());
+    }
+
+    #[test]
+    fn triangle_barycentrics_invert_point() {
+        let t = Triangle::new(Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.5), Vec3::new(-1.0, 0.3, 2.0));
+        let (b1, b2) = t.barycentrics(t.point(0.2, 0.7));
+        assert!((b1 - 0.2).abs() < 1e-5 && (b2 - 0.7).abs() < 1e-5, "{b1} {b2}");
     }
 
     #[test]

@@ -45,13 +45,14 @@ pub fn trace_camera_path(
         specular_path: true,
         origin_offset: 0.0,
     };
-    let pick = scene.light_pick_probability();
 
     loop {
         let Some(hit) = scene.intersect(&path.ray) else {
             // Escaped: the environment light (infinite: no distance update, §5.1).
-            if let Some(light) = scene.background_light()
-                && let Some(emitted) = light.radiance_on_hit(path.ray.direction, &scene.bounding_sphere)
+            if let Some(index) = scene.background
+                && let Some(emitted) =
+                    scene.lights[index as usize].radiance_on_hit(path.ray.direction, &scene.bounding_sphere)
+                && let pick = scene.light_pick_probability(index)
                 && let Some(weight) =
                     emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
             {
@@ -67,6 +68,7 @@ pub fn trace_camera_path(
         // Emitter hit (s = 0).
         if let Some(light_index) = hit.light
             && let Some(emitted) = scene.lights[light_index as usize].radiance_on_hit(direction, &scene.bounding_sphere)
+            && let pick = scene.light_pick_probability(light_index)
             && let Some(weight) =
                 emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
         {

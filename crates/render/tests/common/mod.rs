@@ -134,6 +134,8 @@ fn clearance(scene: &Scene, p: Vec3, own: usize) -> f32 {
             }
             (Shape::Triangle(t), _) => distance_to_triangle(p, &t),
             (Shape::Sphere(s), _) => ((p - s.center).length() - s.radius).abs(),
+            // The distance to the disc's plane: a lower bound, so the clearance stays conservative.
+            (Shape::Disk(d), _) => (p - d.center).dot(d.normal).abs(),
         })
         .fold(f32::INFINITY, f32::min)
 }
@@ -219,7 +221,7 @@ pub fn furnace_with(emission: f32, material: Material, resolution: u32) -> Scene
         for tri in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
             let t = Triangle::new(corners[tri[0]], corners[tri[1]], corners[tri[2]]);
             assert!(t.normal.dot(-t.p0) > 0.0, "normals point inwards");
-            primitives.push(Primitive { shape: Shape::Triangle(t), material: 0, light: Some(lights.len() as u32) });
+            primitives.push(Primitive::new(Shape::Triangle(t), 0, Some(lights.len() as u32)));
             lights.push(Light::Area(AreaLight::new(t, Rgb::splat(emission))));
         }
     }

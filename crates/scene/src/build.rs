@@ -1,0 +1,162 @@
+//! Turning a [`SceneDescription`] (what a file loader produces) into a renderable [`Scene`].
+
+use crate::camera::Camera;
+use crate::desc::{Geometry, LightDesc, MeshData, Projection, SceneDescription};
+use crate::light::{AreaLight, BackgroundLight, DirectionalLight, Light, PointLight};
+use crate::scene::{Primitive, Scene, SurfaceAttributes};
+use crate::shape::{Disk, Shape, Sphere, Triangle};
+
+/// What [`Scene::from_description`] built, for the user's summary line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BuildReport {
+    /// Triangles in the scene.
+    pub triangles: usize,
+    /// Analytic spheres and discs.
+    pub analytic_shapes: usize,
+    /// Degenerate triangles (zero area or non-finite) that were dropped.
+    pub degenerate_triangles: usize,
+    /// Lights, area emitters counted per triangle.
+    pub lights: usize,
+}
+
+impl Scene {
+    /// Builds the scene of a description, rendered at `resolution` (width, height) when given,
+    /// at the film's resolution otherwise. Errors name the shape or light at fault.
+    pub fn from_description(
+        desc: &SceneDescription,
+        resolution: Option<(u32, u32)>,
+    ) -> Result<(Scene, BuildReport), String> {
+        let (width, height) = resolution.unwrap_or((desc.film.width, desc.film.height));
+        if width == 0 || height == 0 {
+            return Err(format!("the film has no pixels ({width}×{height})"));
+        }
+        let mut report = BuildReport::default();
+        let mut primitives = Vec::new();
+        let mut attributes = Vec::new();
+        let mut lights = Vec::new();
+        for shape in &desc.shapes {
+            if shape.material as usize >= desc.materials.len() {
+                return Err(format!(
+                    "shape '{}' refers to material {} of {}",
+                    shape.name,
+                    shape.material,
+                    desc.materials.len()
+                ));
+            }
+            let emission = shape.emission.filter(|e| !e.is_black());
+            if let Some(e) = emission
+                && (!e.is_finite() || e.r < 0.0 || e.g < 0.0 || e.b < 0.0)
+            {
+                return Err(format!("shape '{}' emits an invalid radiance {:?}", shape.name, e.to_array()));
+            }
+            match &shape.geometry {
+                Geometry::Mesh(mesh) => {
+                    mesh.validate().map_err(|e| format!("mesh '{}': {e}", shape.name))?;
+                    for (triangle, extra) in mesh_triangles(mesh) {
+                        let Some(triangle) = triangle else {
+                            report.degenerate_triangles += 1;
+                            continue;
+                        };
+                        let light = emission.map(|radiance| {
+                            lights.push(Light::Area(AreaLight::new(triangle, radiance)));
+                            lights.len() as u32 - 1
+                        });
+                        let mut primitive = Primitive::new(Shape::Triangle(triangle), shape.material, light);
+                        if let Some(extra) = extra {
+                            primitive.attributes = attributes.len() as u32;
+                            attributes.push(extra);
+                        }
+                        primitives.push(primitive);
+                        report.triangles += 1;
+                    }
+                }
+                Geometry::Sphere { center, radius, flip_normals } => {
+                    if !(*radius > 0.0 && radius.is_finite() && center.is_finite()) {
+                        return Err(format!("sphere '{}' has radius {radius} at {center}", shape.name));
+                    }
+                    if emission.is_some() {
+                        return Err(format!("sphere '{}': spherical area lights are not supported yet", shape.name));
+                    }
+                    let mut primitive = Primitive::new(
+                        Shape::Sphere(Sphere { center: *center, radius: *radius }),
+                        shape.material,
+                        None,
+                    );
+                    if *flip_normals {
+                        primitive.attributes = attributes.len() as u32;
+                        attributes.push(SurfaceAttributes::FlippedNormal);
+                    }
+                    primitives.push(primitive);
+                    report.analytic_shapes += 1;
+                }
+                Geometry::Disk { center, axis_u, axis_v, flip_normals } => {
+                    let disk = Disk::new(*center, *axis_u, *axis_v, *flip_normals)
+                        .ok_or_else(|| format!("disk '{}' is degenerate", shape.name))?;
+                    if emission.is_some() {
+                        return Err(format!("disk '{}': disc-shaped area lights are not supported yet", shape.name));
+                    }
+                    primitives.push(Primitive::new(Shape::Disk(disk), shape.material, None));
+                    report.analytic_shapes += 1;
+                }
+            }
+        }
+        let mut environments = 0;
+        for light in &desc.lights {
+            lights.push(match light {
+                LightDesc::Point { position, intensity } => {
+                    Light::Point(PointLight { position: *position, intensity: *intensity })
+                }
+                LightDesc::Directional { direction, irradiance } => {
+                    Light::Directional(DirectionalLight::new(*direction, *irradiance))
+                }
+                LightDesc::Constant { radiance } => {
+                    environments += 1;
+                    Light::Background(BackgroundLight { radiance: *radiance })
+                }
+                LightDesc::Spot { .. } => return Err("spot lights are not supported yet".into()),
+                LightDesc::EnvMap { .. } => return Err("environment maps are not supported yet".into()),
+            });
+        }
+        if environments > 1 {
+            return Err(format!("{environments} environment lights; at most one is supported"));
+        }
+        report.lights = lights.len();
+        let c = &desc.camera;
+        let camera = match c.projection {
+            Projection::Perspective { horizontal_fov_degrees } => {
+                Camera::new(c.position, c.forward, c.up, horizontal_fov_degrees, width, height)
+            }
+            Projection::ThinLens { .. } => return Err("thin-lens cameras are not supported yet".into()),
+            Projection::Orthographic { .. } => return Err("orthographic cameras are not supported yet".into()),
+        };
+        let scene = Scene::new(desc.name.clone(), primitives, desc.materials.clone(), lights, camera)
+            .with_attributes(attributes);
+        Ok((scene, report))
+    }
+}
+
+/// The triangles of a mesh (`None` for degenerate ones) with their vertex attributes. When the
+/// mesh has shading normals, a triangle whose winding disagrees with them is turned around, so
+/// that its geometric normal (which decides the emitting side and one-sided materials) lies on
+/// the side of its shading normals, as Mitsuba orients it.
+fn mesh_triangles(mesh: &MeshData) -> impl Iterator<Item = (Option<Triangle>, Option<SurfaceAttributes>)> + '_ {
+    mesh.triangles.iter().map(move |&[a, b, c]| {
+        let mut index = [a as usize, b as usize, c as usize];
+        let p = |i: usize| mesh.positions[i];
+        let mut triangle = Triangle::new(p(index[0]), p(index[1]), p(index[2]));
+        if !(triangle.area() > 0.0) || !triangle.normal.is_finite() {
+            return (None, None);
+        }
+        let normals = (!mesh.normals.is_empty()).then(|| index.map(|i| mesh.normals[i]));
+        if let Some(n) = normals
+            && (n[0] + n[1] + n[2]).dot(triangle.normal) < 0.0
+        {
+            index.swap(1, 2);
+            triangle = Triangle::new(p(index[0]), p(index[1]), p(index[2]));
+        }
+        let normals = (!mesh.normals.is_empty()).then(|| index.map(|i| mesh.normals[i]));
+        let uvs = (!mesh.uvs.is_empty()).then(|| index.map(|i| mesh.uvs[i]));
+        let extra = (normals.is_some() || uvs.is_some()).then_some(SurfaceAttributes::Triangle { normals, uvs });
+        (Some(triangle), extra)
+    })
+}
