@@ -144,7 +144,7 @@ fn mesh_triangles(mesh: &MeshData) -> impl Iterator<Item = (Option<Triangle>, Op
         let mut index = [a as usize, b as usize, c as usize];
         let p = |i: usize| mesh.positions[i];
         let mut triangle = Triangle::new(p(index[0]), p(index[1]), p(index[2]));
-        if !(triangle.area() > 0.0) || !triangle.normal.is_finite() {
+        if triangle.area().is_nan() || triangle.area() <= 0.0 || !triangle.normal.is_finite() {
             return (None, None);
         }
         let normals = (!mesh.normals.is_empty()).then(|| index.map(|i| mesh.normals[i]));

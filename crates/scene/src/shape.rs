@@ -184,7 +184,7 @@ impl Disk {
     pub fn new(center: Vec3, axis_u: Vec3, axis_v: Vec3, flip: bool) -> Option<Self> {
         let cross = axis_u.cross(axis_v);
         let len2 = cross.length_squared();
-        if !(len2 > 0.0) || !len2.is_finite() || !center.is_finite() {
+        if len2.is_nan() || len2 <= 0.0 || !len2.is_finite() || !center.is_finite() {
             return None;
         }
         // Dual vectors: dual_u ⟂ axis_v with dual_u·axis_u = 1, and vice versa.
