@@ -119,6 +119,11 @@ struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N", default_value_t = 0)]
     threads: usize,
+    /// Memory the light vertices and merging grid may use, e.g. 8G or 512M [default: half of
+    /// the physical memory]. A render that needs more switches to --memory-efficient, or stops
+    /// with a message when that does not fit either.
+    #[arg(long, value_name = "SIZE", value_parser = render::vcm::memory::parse_size)]
+    max_memory: Option<u64>,
     /// Output image; the format follows the extension (.exr, .pfm, .hdr, .png). A linear
     /// output also gets a .png preview beside it.
     #[arg(long, short, value_name = "FILE", default_value = "render.exr")]
@@ -268,6 +273,51 @@ fn build_scene(mask: u32, (width, height): (u32, u32)) -> Result<Scene> {
         .with_context(|| format!("invalid scene mask {mask}: expected 0-{}", cornell::MAX_MASK))
 }
 
+/// Checks the estimated memory of the VCM engine's buffers against `--max-memory` (default:
+/// half of the physical memory). Returns whether to switch to the memory-efficient mode; fails
+/// when even that does not fit.
+fn memory_guard(
+    scene: &Scene,
+    algorithm: render::vcm::VcmAlgorithm,
+    max_length: u32,
+    args: &RenderArgs,
+) -> Result<bool> {
+    use render::vcm::memory::{self, format_size};
+    let Some(limit) = args.max_memory.or_else(|| memory::physical_memory().map(|m| m / 2)) else {
+        return Ok(false);
+    };
+    let settings = render::vcm::VcmSettings {
+        max_length,
+        radius_factor: args.radius_factor,
+        radius_alpha: args.radius_alpha,
+        ..render::vcm::VcmSettings::new(algorithm)
+    };
+    let estimate = memory::estimate(scene, &settings, args.seed);
+    if estimate.two_stage_bytes <= limit {
+        return Ok(false);
+    }
+    let need = format!(
+        "{} light sub-paths x {:.2} stored vertices each need about {}",
+        estimate.light_paths,
+        estimate.vertices_per_path,
+        format_size(estimate.two_stage_bytes)
+    );
+    if estimate.memory_efficient_bytes <= limit {
+        eprintln!(
+            "note: {need}, more than --max-memory {}; switching to --memory-efficient (about {})",
+            format_size(limit),
+            format_size(estimate.memory_efficient_bytes)
+        );
+        return Ok(true);
+    }
+    bail!(
+        "{need} ({} in the memory-efficient mode), more than --max-memory {}: lower the resolution or \
+         --max-length, or raise --max-memory",
+        format_size(estimate.memory_efficient_bytes),
+        format_size(limit)
+    )
+}
+
 /// The files a render writes: the requested one and, for linear formats, a PNG preview.
 fn output_paths(output: &Path) -> Result<Vec<(PathBuf, io::ImageFormat)>> {
     let format = io::ImageFormat::from_path(output)?;
@@ -379,6 +429,11 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
     let LoadedScene { scene, file_max_length } = load_scene(&source, args.resolution, args.quiet)?;
     let max_length = args.max_length.or(file_max_length).unwrap_or(10);
     let resolution = (scene.camera.width, scene.camera.height);
+    if let Algorithm::Vcm(vcm_algorithm) = algorithm
+        && !args.memory_efficient
+    {
+        args.memory_efficient = memory_guard(&scene, vcm_algorithm, max_length, &args)?;
+    }
     let settings = RenderSettings {
         algorithm,
         budget,

@@ -203,3 +203,29 @@ fn technique_images_sum_to_the_image() {
         &["--techniques needs"],
     );
 }
+
+#[test]
+fn memory_guard_switches_or_stops() {
+    let dir = temp_dir("memory");
+    let out = dir.join("a.exr");
+    let out = out.to_str().unwrap();
+    // VCM on 32×32 needs a few hundred KiB; 1K fits neither mode.
+    let output =
+        vcm(&["render", "--scene", "1", "-a", "vcm", "-i", "1", "-r", "32x32", "--max-memory", "1K", "-o", out]);
+    assert_eq!(output.status.code(), Some(2));
+    let message = stderr(&output);
+    assert!(message.contains("more than --max-memory 1 KiB") && message.contains("memory-efficient"), "{message}");
+    // BPT stores nothing in the memory-efficient mode: it switches and renders.
+    let output =
+        vcm(&["render", "--scene", "1", "-a", "bpt", "-i", "1", "-r", "32x32", "--max-memory", "1K", "-o", out]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(stderr(&output).contains("switching to --memory-efficient"), "{}", stderr(&output));
+    // A generous limit changes nothing.
+    let output =
+        vcm(&["render", "--scene", "1", "-a", "vcm", "-i", "1", "-r", "32x32", "--max-memory", "1G", "-o", out]);
+    assert!(output.status.success() && !stderr(&output).contains("switching"), "{}", stderr(&output));
+    // Malformed sizes are rejected by the parser.
+    let output = vcm(&["render", "--max-memory", "lots", "-o", out]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stderr(&output).contains("invalid memory size 'lots'"), "{}", stderr(&output));
+}

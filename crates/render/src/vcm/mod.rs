@@ -26,6 +26,7 @@ pub mod camera_pass;
 pub mod connect;
 pub mod light_pass;
 pub mod light_vertex;
+pub mod memory;
 pub mod merge;
 pub mod mis;
 pub mod subpath;
