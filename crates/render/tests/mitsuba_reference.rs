@@ -59,22 +59,14 @@ fn check(algorithm: &str, iterations: u64) {
     let estimate = common::block_estimate(&scene, &settings, iterations, block);
 
     // Image means per channel.
-    let mut reference_means = [0.0f64; 3];
-    for p in &reference.pixels {
-        for c in 0..3 {
-            reference_means[c] += p[c] as f64 / (w * h) as f64;
-        }
-    }
+    let reference_means: [f64; 3] =
+        std::array::from_fn(|c| reference.pixels.iter().map(|p| p[c] as f64).sum::<f64>() / (w * h) as f64);
     let blocks = estimate.means.len() / 3;
     let mut failures = Vec::new();
-    for c in 0..3 {
+    for (c, reference_mean) in reference_means.into_iter().enumerate() {
         let ours: f64 = (0..blocks).map(|b| estimate.means[b * 3 + c]).sum::<f64>() / blocks as f64;
-        let relative = (ours - reference_means[c]) / reference_means[c];
-        eprintln!(
-            "{algorithm} channel {c}: ours {ours:.5}, Mitsuba {:.5} ({:+.3} %)",
-            reference_means[c],
-            100.0 * relative
-        );
+        let relative = (ours - reference_mean) / reference_mean;
+        eprintln!("{algorithm} channel {c}: ours {ours:.5}, Mitsuba {reference_mean:.5} ({:+.3} %)", 100.0 * relative);
         if relative.abs() > 0.01 {
             failures.push(format!("channel {c}: mean differs by {:+.3} %", 100.0 * relative));
         }
