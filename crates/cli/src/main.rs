@@ -2,6 +2,7 @@
 //! driver and writes the images. This is the only place that makes user-facing decisions
 //! (defaults, file names, messages).
 
+mod bench_accel;
 mod checkpoint;
 mod compare;
 
@@ -176,6 +177,10 @@ struct BenchArgs {
     /// Worker threads (default: all cores).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Time the acceleration structure instead: BVH build and Mrays/s (closest hit and shadow
+    /// rays, one thread and all) on each scene's geometry.
+    #[arg(long)]
+    accel: bool,
 }
 
 fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
@@ -581,6 +586,14 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     } else {
         args.scene.iter().map(|s| scene_source(s, &[])).collect::<Result<_>>()?
     };
+    if args.accel {
+        bench_accel::header();
+        for source in &sources {
+            let LoadedScene { scene, .. } = load_scene(source, Some(args.resolution), true)?;
+            bench_accel::run(&scene, args.threads);
+        }
+        return Ok(());
+    }
     println!(
         "{:<22} {:>9} {:>13} {:>11} {:>15} {:>9} {:>8}  phases of the last iteration (ms)",
         "scene", "algorithm", "ms/iteration", "CPU-s/iter", "light vertices", "B/vertex", "threads"
