@@ -440,6 +440,14 @@ struct Component {
 }
 
 impl Component {
+    /// Unnormalised probability of choosing this component when `w` (in the model's frame) is
+    /// the fixed direction: blend weight times the model's selection weight, 0 from behind a
+    /// one-sided model.
+    #[inline]
+    fn selection_weight(&self, w: Vec3) -> f32 {
+        if self.model.one_sided() && w.z <= 0.0 { 0.0 } else { self.scale * self.model.selection_weight() }
+    }
+
     /// Shading-frame coordinates → the model's coordinates (and back: the map is its own
     /// inverse).
     #[inline]
@@ -988,10 +996,7 @@ impl ModelBsdf {
         let frame = Frame::from_z(shading);
         let cos_fixed_geometric = fixed.dot(geometric);
         let local_fixed = frame.to_local(fixed);
-        if cos_fixed_geometric.abs() < COSINE_EPSILON
-            || local_fixed.z.abs() < COSINE_EPSILON
-            || cos_fixed_geometric * local_fixed.z <= 0.0
-        {
+        if !consistent(cos_fixed_geometric, local_fixed.z) {
             return None;
         }
         let empty = Component {
@@ -1023,7 +1028,7 @@ impl ModelBsdf {
             let w = c.orient(local_fixed);
             c.lobes = c.model.lobe_probabilities(w);
             albedo += c.model.albedo(w) * c.scale;
-            c.probability = if c.model.one_sided() && w.z <= 0.0 { 0.0 } else { c.scale * c.model.selection_weight() };
+            c.probability = c.selection_weight(w);
             total_weight += c.probability;
         }
         if !(total_weight > 0.0) {
@@ -1096,8 +1101,17 @@ impl ModelBsdf {
         }
         let cos_geometric = generated.dot(self.geometric);
         let local = self.frame.to_local(generated);
-        if cos_geometric * local.z <= 0.0 {
+        if !consistent(cos_geometric, local.z) {
             return None;
+        }
+        // Component probabilities when the generated direction is the fixed one (they differ
+        // from the stored ones only by the one-sided components, which do not scatter from
+        // behind).
+        let mut reverse_total = 0.0;
+        if self.count > 1 {
+            for c in &self.components[..self.count] {
+                reverse_total += c.selection_weight(c.orient(local));
+            }
         }
         let mut value = Rgb::BLACK;
         let mut pdf = PdfPair::default();
@@ -1108,7 +1122,14 @@ impl ModelBsdf {
             let e = c.model.evaluate(fixed, generated, self.mode, c.lobes, p_generated);
             value += e.value * c.scale;
             pdf.forward.0 += c.probability * e.forward;
-            pdf.reverse.0 += c.probability * e.reverse;
+            let reverse_probability = if self.count == 1 {
+                1.0
+            } else if reverse_total > 0.0 {
+                c.selection_weight(generated) / reverse_total
+            } else {
+                0.0
+            };
+            pdf.reverse.0 += reverse_probability * e.reverse;
         }
         if value.is_black() || !value.is_finite() {
             return None;
@@ -1165,7 +1186,7 @@ impl ModelBsdf {
                 let local = c.orient(direction);
                 let world = self.frame.to_world(local).normalize();
                 let cos_geometric = world.dot(self.geometric);
-                if cos_geometric * local.z <= 0.0 || rho.is_black() {
+                if !consistent(cos_geometric, local.z) || rho.is_black() {
                     return None;
                 }
                 let value = rho * (c.scale * self.shading_factor(local.z, cos_geometric) / local.z.abs());
@@ -1180,6 +1201,14 @@ impl ModelBsdf {
             }
         }
     }
+}
+
+/// Whether a direction with geometric cosine `cos_geometric` and shading cosine
+/// `cos_shading` lies on the same side of both tangent planes, neither grazing (below
+/// [`COSINE_EPSILON`]).
+#[inline]
+fn consistent(cos_geometric: f32, cos_shading: f32) -> bool {
+    cos_geometric * cos_shading > 0.0 && cos_geometric.abs() >= COSINE_EPSILON && cos_shading.abs() >= COSINE_EPSILON
 }
 
 /// The largest `f32` below 1.
