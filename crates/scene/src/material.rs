@@ -1,18 +1,44 @@
-//! Materials of the reference scenes and the per-hit BSDF built from them.
+//! Materials and the per-hit BSDF built from them.
 //!
-//! A [`Material`] is a sum of components: Lambertian diffuse, normalised Phong, a perfect mirror
-//! and, when `ior ≥ 0`, a smooth dielectric (the mirror part becomes Fresnel-weighted and a
-//! refraction lobe appears). A [`Bsdf`] is built per hit from the material, the geometric normal,
-//! the *fixed* direction (the one the walk arrived from, pointing away from the surface) and the
-//! [`TransportMode`]. Every query takes the *generated* direction and returns both pdfs:
-//! `forward` (fixed → generated) and `reverse` (generated → fixed), in solid angle. Russian
-//! roulette is **not** included in these pdfs; the integrator multiplies them by
-//! [`Bsdf::continuation_probability`].
+//! A [`Bsdf`] is built per hit from the [`Material`], the [`ShadingPoint`] (geometric and
+//! shading normal, uv), the *fixed* direction (the one the walk arrived from, pointing away from
+//! the surface) and the [`TransportMode`]. Every query takes the *generated* direction and
+//! returns both pdfs: `forward` (fixed → generated) and `reverse` (generated → fixed), in solid
+//! angle, including the lobe-selection probabilities (the reverse one with the probabilities
+//! the BSDF would use if the generated direction were the fixed one). Russian roulette is
+//! **not** included in these pdfs; the integrator multiplies them by
+//! [`Bsdf::continuation_probability`]. Specular (delta) lobes use "pdf = probability of picking
+//! the lobe" and value `ρ/|cos θ|` (tech report eq. 52).
 //!
-//! Diffuse and Phong are one-sided: zero unless both directions lie at least
-//! [`COSINE_EPSILON`] above the surface on the side the normal points to. Mirror and glass
-//! work from both sides. Specular lobes use "pdf = probability of picking the lobe" and
-//! value `ρ/|cos θ|` (tech report eq. 52).
+//! **SmallVCM's material** ([`Material::Reference`]) is a sum of Lambertian diffuse, normalised
+//! Phong, a perfect mirror and, when `ior ≥ 0`, a smooth dielectric. It uses the geometric
+//! normal only. Diffuse and Phong are one-sided: zero unless both directions lie at least
+//! [`COSINE_EPSILON`] above the surface on the side the normal points to; mirror and glass work
+//! from both sides.
+//!
+//! **The Mitsuba models** (every other variant) are oriented by the shading normal, while the
+//! sides of the surface (reflection or transmission) are decided by the geometric normal
+//! (Veach 1997, §5.3). A direction on different sides of the two tangent planes, or within
+//! [`COSINE_EPSILON`] of either, scatters nothing. All cosines the integrators see are
+//! geometric, so the value returned is the effective BSDF of the geometric-normal formulation:
+//! with `f_s` the BSDF in the shading frame,
+//!
+//! - radiance mode: `value = f_s(fixed, generated) · |generated·Ns| / |generated·Ng|`,
+//! - importance mode: `value = f_s(generated, fixed) · |fixed·Ns| / |fixed·Ng|` (the adjoint),
+//!
+//! so that the radiance value for (a, b) equals the importance value for (b, a). Refraction
+//! carries `(η_fixed/η_generated)²` in radiance mode and not in importance mode. Diffuse,
+//! conductors and plastics are one-sided (black from behind, as in Mitsuba; wrap them in
+//! [`Material::TwoSided`]); the dielectrics work from both sides. The anisotropic GGX
+//! roughness is aligned with the tangent of `Frame::from_z(shading normal)` (shading points
+//! carry no surface tangent).
+//!
+//! Deviations from Mitsuba: the rough plastic uses the smooth Fresnel transmittance
+//! `1 − F(cos θ)` in place of Mitsuba's precomputed rough transmittance tables, and the smooth
+//! internal diffuse reflectance `Fdr(1/η)` in place of the rough one; the plastics'
+//! specular sampling weight uses the texture values at the hit instead of the textures' means;
+//! a blend chooses its parts in proportion to blend weight × the luminance of the part's
+//! largest reflectance factor (Mitsuba: the blend weight alone).
 
 use math::{COSINE_EPSILON, Frame, INV_PI, PdfW, Vec2, Vec3, sqr, warp};
 
@@ -253,11 +279,12 @@ pub struct PdfPair {
 /// Result of [`Bsdf::evaluate`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BsdfEval {
-    /// BSDF value f (per steradian), without the cosine.
+    /// BSDF value f (per steradian), without the cosine; see the module documentation for the
+    /// shading-normal form.
     pub value: Rgb,
-    /// `|cos θ|` of the generated direction with the normal.
+    /// `|cos θ|` of the generated direction with the geometric normal.
     pub cos_generated: f32,
-    /// Lobe-selection-weighted pdfs of the non-specular lobes.
+    /// Lobe-selection-weighted solid-angle pdfs of the non-specular lobes.
     pub pdf: PdfPair,
 }
 
@@ -266,11 +293,12 @@ pub struct BsdfEval {
 pub struct BsdfSample {
     /// The generated unit direction (world space, pointing away from the surface).
     pub direction: Vec3,
-    /// BSDF value f; for specular lobes `ρ/|cos θ|`.
+    /// BSDF value f (see the module documentation); for specular lobes `ρ/|cos θ|`.
     pub value: Rgb,
-    /// `|cos θ|` of the generated direction.
+    /// `|cos θ|` of the generated direction with the geometric normal.
     pub cos_generated: f32,
-    /// pdfs; for specular lobes the lobe-selection probability.
+    /// Solid-angle pdfs (of the whole non-delta mixture, as [`Bsdf::evaluate`] returns); for
+    /// specular lobes the lobe-selection probability.
     pub pdf: PdfPair,
     /// The lobe that was sampled.
     pub lobe: LobeKind,
@@ -285,6 +313,8 @@ pub struct Bsdf {
     inner: Inner,
 }
 
+// Boxing the larger variant would allocate at every path vertex.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug)]
 enum Inner {
     Reference(ReferenceBsdf),
@@ -987,7 +1017,7 @@ impl ModelBsdf {
         // by the geometric normal).
         let mut shading = point.shading_normal;
         let cos_normals = shading.dot(geometric);
-        if !(cos_normals.abs() > 1e-4) || !shading.is_finite() {
+        if cos_normals.abs() < 1e-4 || cos_normals.is_nan() || !shading.is_finite() {
             shading = geometric;
         } else if cos_normals < 0.0 {
             shading = -shading;
@@ -1031,7 +1061,7 @@ impl ModelBsdf {
             c.probability = c.selection_weight(w);
             total_weight += c.probability;
         }
-        if !(total_weight > 0.0) {
+        if !positive(total_weight) {
             return None;
         }
         for c in &mut bsdf.components[..bsdf.count] {
@@ -1045,7 +1075,7 @@ impl ModelBsdf {
             }
         }
         bsdf.continuation = albedo.max_component().min(1.0);
-        if !(bsdf.continuation > 0.0) {
+        if !positive(bsdf.continuation) {
             return None;
         }
         Some(bsdf)
@@ -1053,7 +1083,7 @@ impl ModelBsdf {
 
     /// Adds the leaves of `material` with blend weight `scale`, on side `side`.
     fn add(&mut self, material: &Material, uv: Vec2, scale: f32, side: f32) {
-        if !(scale > 0.0) {
+        if !positive(scale) {
             return;
         }
         match material {
@@ -1144,7 +1174,7 @@ impl ModelBsdf {
     /// Samples a lobe (all lobes, or only the delta lobes when `specular_only`).
     fn sample(&self, u: [f32; 3], specular_only: bool) -> Option<BsdfSample> {
         let total = if specular_only { self.delta_probability } else { 1.0 };
-        if !(total > 0.0) {
+        if !positive(total) {
             return None;
         }
         // Walk the lobes with u[2]; keep the last candidate for rounding at the end.
@@ -1153,7 +1183,7 @@ impl ModelBsdf {
         'search: for (index, c) in self.components[..self.count].iter().enumerate() {
             for (lobe, p) in c.lobes.iter().enumerate() {
                 let probability = c.probability * p;
-                if !(probability > 0.0) || (specular_only && !c.model.lobe_is_delta(lobe)) {
+                if !positive(probability) || (specular_only && !c.model.lobe_is_delta(lobe)) {
                     continue;
                 }
                 chosen = Some((index, lobe, probability, pick));
@@ -1171,7 +1201,7 @@ impl ModelBsdf {
             Sampled::Lobe { direction, lobe } => {
                 let direction = self.frame.to_world(c.orient(direction)).normalize();
                 let eval = self.evaluate(direction)?;
-                if !(eval.pdf.forward.0 > 0.0) {
+                if !positive(eval.pdf.forward.0) {
                     return None;
                 }
                 Some(BsdfSample {
@@ -1201,6 +1231,12 @@ impl ModelBsdf {
             }
         }
     }
+}
+
+/// `x > 0` (false for NaN).
+#[inline]
+fn positive(x: f32) -> bool {
+    x > 0.0
 }
 
 /// Whether a direction with geometric cosine `cos_geometric` and shading cosine
