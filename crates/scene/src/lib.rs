@@ -11,6 +11,7 @@ pub mod desc;
 pub mod film;
 pub mod light;
 pub mod material;
+pub mod microfacet;
 pub mod scene;
 pub mod shape;
 pub mod texture;
