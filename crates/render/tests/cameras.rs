@@ -146,11 +146,14 @@ fn normalised_filters_integrate_to_one() {
     }
 }
 
+/// A function of a filter offset.
+type TestFunction = fn(Vec2) -> f64;
+
 #[test]
 fn weighted_filter_samples_are_unbiased() {
     // E[weight · g(offset)] must equal ∫ g · f/∫f for test functions g that do not follow the
     // gaussian's table bins: an indicator of an unaligned rectangle, and x² + x·y.
-    let tests: [(&str, fn(Vec2) -> f64); 2] = [
+    let tests: [(&str, TestFunction); 2] = [
         ("rectangle", |o| if (0.13..0.61).contains(&o.x) && (-0.37..0.29).contains(&o.y) { 1.0 } else { 0.0 }),
         ("x² + xy", |o| (o.x * o.x + o.x * o.y) as f64),
     ];

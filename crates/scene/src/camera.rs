@@ -410,7 +410,7 @@ impl Camera {
                 let distance = to_point.length();
                 let outgoing = to_point / distance;
                 let cos = self.forward.dot(outgoing);
-                if !(cos > 0.0) {
+                if cos.is_nan() || cos <= 0.0 {
                     return None;
                 }
                 // Where the ray from the lens point through `point` crosses the plane in focus.

@@ -18,7 +18,11 @@ const GAUSSIAN_BINS: usize = 128;
 const SIMPSON_STEPS: usize = 32;
 
 /// A pixel reconstruction filter.
+///
+/// The gaussian carries its sampling table inline (about 0.5 KiB) so that the filter, and the
+/// camera holding it, stay `Copy`; there is one per camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant)]
 pub enum Filter {
     /// Box of half-width 0.5 pixel: `f = 1` on `[−0.5, 0.5]²`, each sample counts for its own
     /// pixel only.
