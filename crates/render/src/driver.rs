@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
-use math::{Rng, Vec2};
+use math::Rng;
 use rayon::prelude::*;
 use scene::{Film, FrameBuffer, Scene};
 use spectrum::Rgb;
@@ -372,8 +372,9 @@ fn render_iteration(
             for (x, pixel) in row.iter_mut().enumerate() {
                 let index = (y * width + x) as u64;
                 let mut rng = Rng::for_stream(seed, iteration, index);
-                let raster = Vec2::new(x as f32 + rng.uniform(), y as f32 + rng.uniform());
-                let value = radiance(scene.camera.generate_ray(raster), &mut rng);
+                // Raster position through the filter (weight 1 for the box), then the lens.
+                let primary = scene.camera.sample_primary(x as u32, y as u32, &mut rng);
+                let value = radiance(primary.ray, &mut rng) * primary.weight;
                 *pixel = if value.is_finite() {
                     value
                 } else {

@@ -9,6 +9,7 @@ pub mod camera;
 pub mod cornell;
 pub mod desc;
 pub mod film;
+pub mod filter;
 pub mod light;
 pub mod material;
 pub mod microfacet;
@@ -18,6 +19,7 @@ pub mod texture;
 
 pub use camera::Camera;
 pub use film::{Film, FrameBuffer};
+pub use filter::Filter;
 pub use light::{BoundingSphere, DirectSample, EmissionSample, HitRadiance, Light};
 pub use material::{
     Bsdf, BsdfEval, BsdfSample, LobeKind, Material, PdfPair, ReferenceMaterial, ShadingPoint, TransportMode,

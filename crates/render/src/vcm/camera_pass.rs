@@ -3,7 +3,8 @@
 //! merges with all light vertices in range (s, t ≥ 2), then BSDF sampling with Russian
 //! roulette.
 
-use math::{Rng, Vec2};
+use math::Rng;
+use scene::camera::PrimaryDensity;
 use scene::{Bsdf, Scene, TransportMode};
 use spectrum::Rgb;
 
@@ -33,15 +34,21 @@ pub fn trace_camera_path(
     let radius = it.pixel_radius(pixel);
     let mut out = FamilyValues::default();
     let camera = &scene.camera;
-    let raster = Vec2::new(x as f32 + rng.uniform(), y as f32 + rng.uniform());
-    let ray = camera.generate_ray(raster);
-    let camera_pdf_w = camera.solid_angle_pdf(camera.forward.dot(ray.direction)).0;
+    // Raster position through the filter (its weight starts the throughput), then the lens.
+    let primary = camera.sample_primary(x, y, rng);
+    // The start density for MIS: per solid angle for perspective cameras; per area on the
+    // film for the orthographic camera, whose first segment then takes no distance factor
+    // (like the first segment from an infinite light, §5.2).
+    let (camera_pdf, distance_on_first_segment) = match camera.primary_density(primary.ray.direction) {
+        PrimaryDensity::SolidAngle(pdf) => (pdf.0, true),
+        PrimaryDensity::Area(pdf) => (pdf.0, false),
+    };
     let mut path = SubPath {
-        ray,
-        throughput: Rgb::WHITE,
+        ray: primary.ray,
+        throughput: Rgb::splat(primary.weight),
         path_length: 1,
-        mis: SubPathMis::camera_start(camera_pdf_w, k),
-        is_finite_light: true,
+        mis: SubPathMis::camera_start(camera_pdf, k),
+        is_finite_light: distance_on_first_segment,
         specular_path: true,
         origin_offset: 0.0,
     };

@@ -2,7 +2,7 @@
 //! light (s = 1, next-event estimation), a camera vertex to a light vertex (s, t > 1), and the
 //! weight of an emitter hit by a camera path (s = 0).
 
-use math::{Rng, Vec3};
+use math::{Rng, Vec2, Vec3};
 use scene::{Bsdf, Scene};
 use spectrum::Rgb;
 
@@ -11,19 +11,37 @@ use super::light_vertex::LightVertex;
 use super::mis::{self, ConnectionPdfs, MisConstants, NeePdfs};
 use super::subpath::SubPath;
 
-/// A light-tracing contribution to be added to one pixel.
+/// A light-tracing contribution.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Splat {
-    /// Row-major pixel index.
-    pub pixel: u32,
-    /// Contribution (already divided by the number of light sub-paths).
+    /// Where it goes.
+    pub target: SplatTarget,
+    /// Contribution (already divided by the number of light sub-paths; for
+    /// [`SplatTarget::Pixel`] already multiplied by the filter value).
     pub value: Rgb,
 }
 
-/// Connects light sub-path vertex `position` (with `bsdf`) to the camera (t = 1). Returns the
-/// splat, or `None` if the vertex is outside the image, faces away or is occluded.
-/// `weighted = false` gives plain light tracing (weight 1). The weight uses the constants of
-/// the pixel the vertex lands in.
+/// Where a light-tracing contribution is added.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SplatTarget {
+    /// Added as is to this pixel (row-major index).
+    Pixel(u32),
+    /// Spread over the pixels [`scene::Camera::filter_pixels`] lists for this raster position
+    /// (pixels), each receiving `value × f(raster − centre)/∫f`.
+    Filtered(Vec2),
+}
+
+/// Connects light sub-path vertex `position` (with `bsdf`) to the camera (t = 1) and appends
+/// the resulting splats: none if the vertex projects where no pixel's filter reaches, faces
+/// away or is occluded. The thin lens draws its lens point from `rng` (two numbers, drawn
+/// before anything can fail); the other cameras draw nothing. `weighted = false` gives plain
+/// light tracing (weight 1).
+///
+/// The weight uses the constants of the pixel the splat is added to: with a per-pixel radius
+/// and a filter wider than the box, one splat per pixel in the filter's reach, each weighted
+/// for its pixel; otherwise a single splat (the pixel the vertex lands in for the box filter,
+/// the raster position for the others).
+#[allow(clippy::too_many_arguments)]
 pub fn connect_to_camera(
     scene: &Scene,
     light: &SubPath,
@@ -31,34 +49,54 @@ pub fn connect_to_camera(
     position: Vec3,
     weighted: bool,
     it: &Iteration,
-) -> Option<Splat> {
+    rng: &mut Rng,
+    splats: &mut Vec<Splat>,
+) {
     let camera = &scene.camera;
-    let raster = camera.raster_position(position)?;
-    let x = (raster.x as u32).min(camera.width - 1);
-    let y = (raster.y as u32).min(camera.height - 1);
-    let pixel = y * camera.width + x;
-    let k = &it.pixel_constants(pixel as usize);
-    let to_camera = camera.position - position;
-    let distance = to_camera.length();
-    let direction = to_camera / distance;
-    let eval = bsdf.evaluate(direction)?;
-    let cos_at_camera = camera.forward.dot(-direction);
-    // Density of the camera sampling this point: image-plane density 1 per pixel, to solid
-    // angle (d²/cos³), to area at the vertex (cos/distance²).
-    let camera_pdf_a = camera.solid_angle_pdf(cos_at_camera).to_area(distance * distance, eval.cos_generated).0;
-    let weight = if weighted {
-        let reverse = eval.pdf.reverse.0 * bsdf.continuation_probability();
-        let light_mis = if it.rebase() { light.mis.for_constants(k) } else { light.mis };
-        mis::camera_connection_weight(&light_mis, camera_pdf_a, reverse, k)
-    } else {
-        1.0
-    };
+    let u_lens = if camera.needs_lens_sample() { rng.uniform2() } else { [0.5, 0.5] };
+    let Some(connection) = camera.connect(position, u_lens) else { return };
+    let Some(eval) = bsdf.evaluate(connection.direction) else { return };
+    // Density of the camera sampling this point: image-plane density 1 per pixel, to area at
+    // the vertex (the thin lens' lens-point density cancels between techniques).
+    let camera_pdf_a = connection.area_pdf(eval.cos_generated).0;
+    let reverse = eval.pdf.reverse.0 * bsdf.continuation_probability();
     // The pixel integral is over the image plane: the estimate is f·T·(camera pdf)/N_L.
-    let value = light.throughput * eval.value * (weight * camera_pdf_a / k.light_path_count);
-    if value.is_black() || scene.occluded(position, direction, distance) {
-        return None;
+    let unweighted = light.throughput * eval.value;
+    let weight_for = |k: &MisConstants| {
+        if weighted {
+            let light_mis = if it.rebase() { light.mis.for_constants(k) } else { light.mis };
+            mis::camera_connection_weight(&light_mis, camera_pdf_a, reverse, k)
+        } else {
+            1.0
+        }
+    };
+    let start = splats.len();
+    if camera.filter.is_box() {
+        let Some((pixel, _)) = camera.filter_pixels(connection.raster).next() else { return };
+        let k = &it.pixel_constants(pixel as usize);
+        let value = unweighted * (weight_for(k) * camera_pdf_a / k.light_path_count);
+        if !value.is_black() {
+            splats.push(Splat { target: SplatTarget::Pixel(pixel), value });
+        }
+    } else if it.rebase() && weighted {
+        // Every pixel weighs the path with its own radius.
+        for (pixel, filter) in camera.filter_pixels(connection.raster) {
+            let k = &it.pixel_constants(pixel as usize);
+            let value = unweighted * (weight_for(k) * camera_pdf_a * filter / k.light_path_count);
+            if !value.is_black() {
+                splats.push(Splat { target: SplatTarget::Pixel(pixel), value });
+            }
+        }
+    } else {
+        let k = &it.constants;
+        let value = unweighted * (weight_for(k) * camera_pdf_a / k.light_path_count);
+        if !value.is_black() {
+            splats.push(Splat { target: SplatTarget::Filtered(connection.raster), value });
+        }
     }
-    Some(Splat { pixel, value })
+    if splats.len() > start && scene.occluded(position, connection.direction, connection.distance) {
+        splats.truncate(start);
+    }
 }
 
 /// Next-event estimation from camera vertex `position` (s = 1), MIS-weighted (eqs. 44, 45).

@@ -65,11 +65,8 @@ pub fn trace_light_path(
                     continuation: bsdf.continuation_probability(),
                 });
             }
-            if techniques.connect_to_camera()
-                && path.path_length < it.max_length
-                && let Some(splat) = connect_to_camera(scene, &path, &bsdf, hit.position, techniques.connect, it)
-            {
-                splats.push(splat);
+            if techniques.connect_to_camera() && path.path_length < it.max_length {
+                connect_to_camera(scene, &path, &bsdf, hit.position, techniques.connect, it, rng, splats);
             }
         }
         // A longer light sub-path could not be connected to any camera vertex.

@@ -86,7 +86,9 @@ impl SubPathMis {
     }
 
     /// A camera sub-path leaving the camera (eqs. 31–33, eye side): `camera_pdf_w` is the
-    /// solid-angle density of the primary ray (image-plane density 1 per pixel).
+    /// solid-angle density of the primary ray (image-plane density 1 per pixel), or, for an
+    /// orthographic camera, its area density on the film (§5.2: the first arrival then applies
+    /// no distance factor).
     pub fn camera_start(camera_pdf_w: f32, k: &MisConstants) -> Self {
         Self {
             d_vcm: k.light_path_count / camera_pdf_w, // [tech. rep. eq. 31] n_light/p→1, p0 ratio 1

@@ -38,7 +38,7 @@ use spectrum::Rgb;
 
 use crate::hash_grid::HashGrid;
 use camera_pass::trace_camera_path;
-use connect::Splat;
+use connect::{Splat, SplatTarget};
 use light_pass::trace_light_path;
 use light_vertex::{LightVertex, LightVertexStore, MergeVertex};
 use merge::MergeSource;
@@ -416,7 +416,13 @@ impl VcmEngine {
         });
         let camera_pass = start.elapsed() - light_pass - grid_build;
         let splats = chunks.iter().map(|c| c.2.len()).sum();
-        apply_splats(frame, self.family_frames.as_mut(), chunks.iter().map(|c| c.2.as_slice()), &mut rejected);
+        apply_splats(
+            frame,
+            &scene.camera,
+            self.family_frames.as_mut(),
+            chunks.iter().map(|c| c.2.as_slice()),
+            &mut rejected,
+        );
         self.stats.phases = PhaseTimes { light_pass, grid_build, camera_pass };
         self.stats.light_vertices = self.store.vertices.len();
         self.stats.bytes_per_vertex = LightVertexStore::BYTES_PER_VERTEX
@@ -502,7 +508,13 @@ impl VcmEngine {
             rejected += row_rejected;
         }
         let splats = rows.iter().map(|r| r.1.len()).sum();
-        apply_splats(frame, self.family_frames.as_mut(), rows.iter().map(|r| r.1.as_slice()), &mut rejected);
+        apply_splats(
+            frame,
+            &scene.camera,
+            self.family_frames.as_mut(),
+            rows.iter().map(|r| r.1.as_slice()),
+            &mut rejected,
+        );
         // This iteration's vertices serve the next iteration's merges, at its radius.
         if it.techniques.merge {
             let next = match &self.pixel_footprints {
@@ -602,13 +614,22 @@ fn render_pixels(
     }
 }
 
-/// Adds light-tracing splats to the frame in the given (light sub-path) order.
+/// Adds light-tracing splats to the frame in the given (light sub-path) order: a pixel splat
+/// to its pixel, a filtered splat to every pixel within the camera filter's radius, weighted by
+/// the normalised filter ([`scene::Camera::filter_pixels`]).
 fn apply_splats<'s>(
     frame: &mut FrameBuffer,
+    camera: &scene::Camera,
     mut family_frames: Option<&mut Vec<FamilyValues>>,
     splats: impl Iterator<Item = &'s [Splat]>,
     rejected: &mut u64,
 ) {
+    let mut add = |pixel: u32, value: Rgb| {
+        frame.pixels[pixel as usize] += value;
+        if let Some(families) = family_frames.as_deref_mut() {
+            families[pixel as usize].add(Family::LightTracing, value);
+        }
+    };
     for splat in splats.flatten() {
         let value = if splat.value.is_finite() {
             splat.value
@@ -616,17 +637,22 @@ fn apply_splats<'s>(
             *rejected += 1;
             Rgb::BLACK
         };
-        frame.pixels[splat.pixel as usize] += value;
-        if let Some(families) = family_frames.as_deref_mut() {
-            families[splat.pixel as usize].add(Family::LightTracing, value);
+        match splat.target {
+            SplatTarget::Pixel(pixel) => add(pixel, value),
+            SplatTarget::Filtered(raster) => {
+                for (pixel, filter) in camera.filter_pixels(raster) {
+                    add(pixel, value * filter);
+                }
+            }
         }
     }
 }
 
 /// Per-pixel merging radii before the iteration schedule: the radius of a disc with the area
-/// of the pixel's footprint at the first surface hit by the ray through its centre,
-/// `d·sqrt(cos³/π)/f` (d the distance, f the image-plane distance in pixels, cos at the
-/// camera). Pixels that see nothing get `fallback`.
+/// of the pixel's footprint at the first surface hit by the ray through its centre (and the
+/// lens centre), [`scene::Camera::footprint_radius`]: `d·sqrt(cos³/π)/f` for perspective
+/// cameras (d the distance, f the image-plane distance in pixels, cos at the camera),
+/// `sqrt(A_pixel/π)` for the orthographic camera. Pixels that see nothing get `fallback`.
 fn pixel_footprints(scene: &Scene, fallback: f32) -> Vec<f32> {
     let camera = &scene.camera;
     let width = camera.width as usize;
@@ -637,10 +663,7 @@ fn pixel_footprints(scene: &Scene, fallback: f32) -> Vec<f32> {
             let ray = camera.generate_ray(raster);
             match scene.intersect(&ray) {
                 None => fallback,
-                Some(hit) => {
-                    let cos = camera.forward.dot(ray.direction);
-                    hit.distance * (cos * cos * cos / math::PI).sqrt() / camera.image_plane_distance()
-                }
+                Some(hit) => camera.footprint_radius(&ray, hit.distance),
             }
         })
         .collect()
