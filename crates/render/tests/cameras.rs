@@ -513,7 +513,7 @@ fn edge_scene(camera: Camera) -> (Scene, f32) {
     let (x1, y0, y1) = (1.25, -0.5, 0.5);
     let p = |x: f32, y: f32| Vec3::new(x, y, 0.0);
     let triangles = [Triangle::new(p(x0, y0), p(x1, y0), p(x1, y1)), Triangle::new(p(x0, y0), p(x1, y1), p(x0, y1))];
-    let primitives = triangles.map(|t| Primitive { shape: Shape::Triangle(t), material: 0, light: None }).to_vec();
+    let primitives = triangles.map(|t| Primitive::new(Shape::Triangle(t), 0, None)).to_vec();
     let direction = Vec3::new(0.3, 0.2, -1.0).normalize();
     let light = Light::Directional(DirectionalLight::new(direction, Rgb::splat(EDGE_IRRADIANCE)));
     let material = ReferenceMaterial::diffuse(Rgb::splat(EDGE_ALBEDO)).into();

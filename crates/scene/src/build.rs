@@ -1,7 +1,8 @@
 //! Turning a [`SceneDescription`] (what a file loader produces) into a renderable [`Scene`].
 
 use crate::camera::Camera;
-use crate::desc::{Geometry, LightDesc, MeshData, Projection, SceneDescription};
+use crate::desc::{Geometry, LightDesc, MeshData, SceneDescription};
+use crate::filter::Filter;
 use crate::light::{AreaLight, BackgroundLight, DirectionalLight, Light, PointLight};
 use crate::scene::{Primitive, Scene, SurfaceAttributes};
 use crate::shape::{Disk, Shape, Sphere, Triangle};
@@ -121,14 +122,8 @@ impl Scene {
             return Err(format!("{environments} environment lights; at most one is supported"));
         }
         report.lights = lights.len();
-        let c = &desc.camera;
-        let camera = match c.projection {
-            Projection::Perspective { horizontal_fov_degrees } => {
-                Camera::new(c.position, c.forward, c.up, horizontal_fov_degrees, width, height)
-            }
-            Projection::ThinLens { .. } => return Err("thin-lens cameras are not supported yet".into()),
-            Projection::Orthographic { .. } => return Err("orthographic cameras are not supported yet".into()),
-        };
+        let filter = Filter::from_desc(&desc.film.filter)?;
+        let camera = Camera::from_desc(&desc.camera, width, height)?.with_filter(filter);
         let scene = Scene::new(desc.name.clone(), primitives, desc.materials.clone(), lights, camera)
             .with_attributes(attributes);
         Ok((scene, report))
