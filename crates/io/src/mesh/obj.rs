@@ -195,13 +195,6 @@ impl Builder {
         at: &At,
         path: &Path,
     ) -> Result<(), SceneError> {
-        if corners.len() < 3 {
-            return Err(at.error(
-                path,
-                Some(keyword_offset),
-                format!("a face needs at least 3 vertices, this one has {}", corners.len()),
-            ));
-        }
         self.face.clear();
         for &(offset, corner) in corners {
             let error = |message: String| at.error(path, Some(offset), message);
@@ -223,6 +216,13 @@ impl Builder {
             };
             let id = self.vertex([p, t, n]).ok_or_else(|| error("more than 2³² − 1 distinct vertices".into()))?;
             self.face.push(id);
+        }
+        if corners.len() < 3 {
+            return Err(at.error(
+                path,
+                Some(keyword_offset),
+                format!("a face needs at least 3 vertices, this one has {}", corners.len()),
+            ));
         }
         for i in 1..self.face.len() - 1 {
             self.triangles.push([self.face[0], self.face[i], self.face[i + 1]]);

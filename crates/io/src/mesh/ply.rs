@@ -561,7 +561,11 @@ fn value<S: Source>(source: &mut S, scalar: Scalar, element: &Element, i: u64) -
             "the file ends inside {} {} of the {} the header declares",
             element.name,
             i,
-            plural(element.count, &element.name, &format!("{} elements", element.name)),
+            match element.name.as_str() {
+                "vertex" => plural(element.count, "vertex", "vertices"),
+                "face" => plural(element.count, "face", "faces"),
+                name => plural(element.count, &format!("`{name}` element"), &format!("`{name}` elements")),
+            },
         )),
         Fail::Syntax(message) => source.error(format!("{message} in {} {i}", element.name)),
     })
