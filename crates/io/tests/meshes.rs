@@ -423,7 +423,13 @@ fn ply_ascii_errors_name_line_and_column() {
         "300 does not fit in the declared type uchar",
     );
     // Wrong counts: one vertex too many declared, or one face too few.
-    assert_error(ply(good.replace("element vertex 5", "element vertex 6").as_bytes()), "t.ply:", "");
+    // With 6 declared vertices the first face line is read as vertex 5, and face 0 starts in the
+    // middle of the next line, running into the texture coordinate 0.5.
+    assert_error(
+        ply(good.replace("element vertex 5", "element vertex 6").as_bytes()),
+        "t.ply:28:11: ",
+        "found `0.5` in face 0",
+    );
     assert_error(
         ply(good.replace("element face 5", "element face 4").as_bytes()),
         "t.ply:31:1: ",
@@ -656,4 +662,77 @@ fn serialized_version_4_double_precision_colours_and_face_normals() {
         "s.serialized: ",
         "vertex 0 has a non-finite position",
     );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Robustness
+
+/// Checks what the readers promise about any mesh they return.
+#[track_caller]
+fn assert_sound(mesh: &MeshData, what: &str) {
+    assert!(mesh.validate().is_ok(), "{what}: {:?}", mesh.validate());
+    assert!(!mesh.triangles.is_empty(), "{what}: no triangles");
+    assert!(mesh.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-5), "{what}: normals not unit length");
+    assert!(mesh.uvs.iter().all(|uv| uv.is_finite()), "{what}: non-finite uvs");
+}
+
+/// Random edits (fixed seed) of valid files: every result is an error or a sound mesh, and
+/// nothing panics.
+#[test]
+fn mutated_files_give_errors_or_sound_meshes() {
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = move |bound: usize| {
+        // xorshift64*
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 33) as usize % bound.max(1)
+    };
+    let flags = 0x1 | 0x2 | 0x8 | 0x2000;
+    let inputs: [(&str, Vec<u8>); 5] = [
+        ("obj", std::fs::read(data("quad.obj")).unwrap()),
+        ("ply", std::fs::read(data("pyramid.ply")).unwrap()),
+        ("ply", binary_pyramid(false, "uchar", "int")),
+        ("ply", binary_pyramid(true, "ushort", "uint")),
+        ("serialized", serialized_file(4, flags, (3, 1), &triangle_payload([0, 1, 2]))),
+    ];
+    const INTERESTING: &[u8] = b"-09/ \n\\#.eE\xff\x00\x7f";
+    let mut outcomes = [0usize; 2];
+    for (kind, original) in &inputs {
+        for iteration in 0..2000 {
+            let mut bytes = original.clone();
+            for _ in 0..1 + next(3) {
+                let at = next(bytes.len());
+                match next(5) {
+                    0 => bytes[at] = next(256) as u8,
+                    1 => bytes[at] = INTERESTING[next(INTERESTING.len())],
+                    2 => bytes.insert(at, INTERESTING[next(INTERESTING.len())]),
+                    3 => _ = bytes.remove(at),
+                    _ => bytes.truncate(at),
+                }
+                if bytes.is_empty() {
+                    break;
+                }
+            }
+            let path = Path::new("fuzz");
+            let result = match *kind {
+                "obj" => parse_obj(&bytes, path),
+                "ply" => parse_ply(&bytes, path),
+                _ => parse_serialized(&bytes, 0, path),
+            };
+            match result {
+                Ok(mesh) => {
+                    assert_sound(&mesh, &format!("{kind} mutation {iteration}"));
+                    outcomes[0] += 1;
+                }
+                Err(error) => {
+                    assert!(error.to_string().starts_with("fuzz"), "{error}");
+                    outcomes[1] += 1;
+                }
+            }
+        }
+    }
+    eprintln!("mutated files: {} parsed, {} rejected", outcomes[0], outcomes[1]);
+    // Both outcomes occur: the edits neither always break nor never touch the parsers.
+    assert!(outcomes[0] > 100 && outcomes[1] > 100, "{outcomes:?}");
 }

@@ -634,7 +634,12 @@ fn read_vertices<S: Source>(
                     position[axis] = x;
                 }
                 Role::Normal(axis) => normal[axis] = x,
-                Role::Uv(axis) => uv[axis] = x,
+                Role::Uv(axis) => {
+                    if !x.is_finite() {
+                        return Err(source.error(format!("vertex {i} has a non-finite texture coordinate")));
+                    }
+                    uv[axis] = x;
+                }
                 Role::Skip => {}
             }
         }

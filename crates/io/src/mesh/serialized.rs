@@ -196,6 +196,12 @@ pub(super) fn parse(bytes: &[u8], shape_index: u32, path: &Path) -> Result<MeshD
     let mut normals: Vec<Vec3> = if has_normals { (0..n).map(|_| reader.vec3()).collect() } else { Vec::new() };
     let uvs: Vec<Vec2> =
         if has_uvs { (0..n).map(|_| Vec2::new(reader.next(), reader.next())).collect() } else { Vec::new() };
+    if let Some(i) = uvs.iter().position(|uv| !uv.is_finite()) {
+        return Err(SceneError::in_file(
+            path,
+            format!("mesh {shape_index}: vertex {i} has a non-finite texture coordinate"),
+        ));
+    }
     if flags & HAS_COLORS != 0 {
         reader.pos += n * 3 * float_size as usize;
     }
