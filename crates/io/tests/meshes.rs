@@ -195,6 +195,9 @@ fn obj_line_continuation_comments_and_ignored_statements() {
                 cstype bspline\nl 1 2\np 1\ng a b\ns 1\n\nf 1 \\\n 2 3\n";
     let mesh = obj(text).unwrap();
     assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    // A backslash at the end of a comment does not continue it.
+    let mesh = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\n# C:\\models\\\nf 1 2 3\n").unwrap();
+    assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
     assert_eq!(mesh.positions[2], Vec3::new(0.0, 1.0, 0.0));
     // A `vt` with only u has v = 0, which flips to 1.
     let mesh = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5\nf 1/1 2/1 3/1\n").unwrap();

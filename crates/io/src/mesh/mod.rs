@@ -64,7 +64,7 @@ pub fn read_serialized(path: &Path, shape_index: u32) -> Result<MeshData, SceneE
 ///
 /// The other statements of the OBJ specification (`o`, `g`, `s`, `usemtl`, `mtllib`, `p`, `l`,
 /// free-form geometry, …) are ignored; any other statement is an error. Comments start with
-/// `#`; a line ending in `\` continues on the next line.
+/// `#`; a line ending in `\` outside a comment continues on the next line.
 pub fn parse_obj(bytes: &[u8], path: &Path) -> Result<MeshData, SceneError> {
     let mesh = obj::parse(bytes, path)?;
     finish(mesh, path)

@@ -100,9 +100,10 @@ fn split_line(bytes: &[u8]) -> (&[u8], &[u8]) {
     (line.strip_suffix(b"\r").unwrap_or(line), rest)
 }
 
-/// Whether the line (ignoring trailing blanks) ends with the continuation mark `\`.
+/// Whether the line (ignoring trailing blanks) ends with the continuation mark `\` outside a
+/// comment (so that a comment ending in a backslash cannot swallow the next statement).
 fn continues(line: &[u8]) -> bool {
-    line.trim_ascii_end().ends_with(b"\\")
+    line.trim_ascii_end().ends_with(b"\\") && !line.contains(&b'#')
 }
 
 /// The whitespace-separated tokens of `line` with their byte offsets.
