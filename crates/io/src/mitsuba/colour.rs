@@ -273,21 +273,17 @@ fn table(t: &[f64; 95], lambda: f64) -> f64 {
     t[i] * (1.0 - f) + t[i + 1] * f
 }
 
-/// The piecewise-linear spectrum at `lambda` (zero outside the sampled range).
+/// The piecewise-linear spectrum at `lambda` (zero outside the sampled range). The
+/// wavelengths are strictly increasing and there are at least two samples.
 fn sample(spectrum: &[(f64, f64)], lambda: f64) -> f64 {
     let (Some(first), Some(last)) = (spectrum.first(), spectrum.last()) else { return 0.0 };
-    if lambda < first.0 || lambda > last.0 {
+    if spectrum.len() < 2 || lambda < first.0 || lambda > last.0 {
         return 0.0;
     }
-    let i = spectrum.partition_point(|&(w, _)| w <= lambda).clamp(1, spectrum.len().max(2) - 1);
-    if spectrum.len() < 2 {
-        return first.1;
-    }
+    // The first sample at a wavelength above `lambda` (the last one at the upper end).
+    let i = spectrum.partition_point(|&(w, _)| w <= lambda).clamp(1, spectrum.len() - 1);
     let (w0, v0) = spectrum[i - 1];
     let (w1, v1) = spectrum[i];
-    if w1 <= w0 {
-        return v0;
-    }
     v0 + (v1 - v0) * (lambda - w0) / (w1 - w0)
 }
 
