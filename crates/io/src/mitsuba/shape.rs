@@ -1,0 +1,263 @@
+//! `<shape>` plugins: meshes from files, Mitsuba's analytic rectangle, cube, sphere and disk.
+
+use math::{Vec2, Vec3};
+use scene::desc::{Geometry, MeshData, ShapeDesc};
+
+use super::Loader;
+use super::Resolved;
+use super::props::Plugin;
+use super::transform::{Mat4, apply3, cross, dot, from_vec3, length, normalize, positive, to_vec3};
+use super::xml::{Node, Pos};
+use crate::scene_error::SceneError;
+
+/// Mitsuba's `rectangle`: `[-1, 1]²` at `z = 0`, normal `+z`, uv `(0,0)` at `(-1,-1)`.
+pub(crate) fn rectangle_mesh() -> MeshData {
+    MeshData {
+        positions: vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ],
+        normals: Vec::new(),
+        uvs: vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)],
+        triangles: vec![[0, 1, 2], [2, 3, 0]],
+    }
+}
+
+/// Mitsuba's `cube`: `[-1, 1]³`, four vertices per face, normals outward (by the winding).
+pub(crate) fn cube_mesh() -> MeshData {
+    let mut mesh = MeshData::default();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            // Tangent axes (b, c) with e_b × e_c = sign · e_axis.
+            let (mut b, mut c) = ((axis + 1) % 3, (axis + 2) % 3);
+            if sign < 0.0 {
+                std::mem::swap(&mut b, &mut c);
+            }
+            let base = mesh.positions.len() as u32;
+            for (u, v) in [(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                let mut p = [0.0f32; 3];
+                p[axis] = sign;
+                p[b] = u;
+                p[c] = v;
+                mesh.positions.push(Vec3::from_array(p));
+                mesh.uvs.push(Vec2::new(0.5 * (u + 1.0), 0.5 * (v + 1.0)));
+            }
+            mesh.triangles.push([base, base + 1, base + 2]);
+            mesh.triangles.push([base + 2, base + 3, base]);
+        }
+    }
+    mesh
+}
+
+/// Applies `to_world` to an object-space mesh: positions by the matrix, normals by its inverse
+/// transpose (renormalised); a mirroring transform reverses the winding so that the geometric
+/// normal stays on the side of the transformed normals. `flip` reverses the winding and the
+/// normals; `face_normals` drops the vertex normals.
+pub(crate) fn transform_mesh(
+    mut mesh: MeshData,
+    m: &Mat4,
+    flip: bool,
+    face_normals: bool,
+    pos: &Pos,
+    what: &str,
+    warnings: &mut Vec<String>,
+) -> Result<MeshData, SceneError> {
+    mesh.validate().map_err(|e| pos.error(format!("{what}: invalid mesh: {e}")))?;
+    let normal_matrix = m.normal_matrix().ok_or_else(|| pos.error(format!("{what}: 'to_world' is singular")))?;
+    for p in &mut mesh.positions {
+        *p = to_vec3(m.point(from_vec3(*p)));
+    }
+    if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
+        return Err(pos.error(format!("{what}: vertex {i} is not finite after 'to_world'")));
+    }
+    if face_normals {
+        mesh.normals.clear();
+    }
+    let mut normals = Vec::with_capacity(mesh.normals.len());
+    for n in &mesh.normals {
+        match normalize(apply3(&normal_matrix, from_vec3(*n))) {
+            Some(t) => normals.push(to_vec3(if flip { t.map(|v| -v) } else { t })),
+            None => {
+                warnings.push(format!(
+                    "{}: {what}: zero or non-finite vertex normal; vertex normals dropped",
+                    pos.location()
+                ));
+                normals.clear();
+                break;
+            }
+        }
+    }
+    mesh.normals = normals;
+    if (m.det3() < 0.0) != flip {
+        for t in &mut mesh.triangles {
+            t.swap(1, 2);
+        }
+    }
+    Ok(mesh)
+}
+
+impl<'a> Loader<'a> {
+    /// A `<shape>` element.
+    pub(crate) fn shape(&mut self, node: &'a Node) -> Result<(), SceneError> {
+        let p = Plugin::new(node)?;
+        let to_world = p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let flip = p.boolean_or("flip_normals", false)?;
+        let what = p.what();
+        let geometry = match p.ty.as_str() {
+            "obj" | "ply" | "serialized" => {
+                let filename = p.string_required("filename")?.to_string();
+                let path = self.resolve_file(&filename, node)?;
+                let mesh = match p.ty.as_str() {
+                    "obj" => crate::mesh::read_obj(&path)?,
+                    "ply" => crate::mesh::read_ply(&path)?,
+                    _ => {
+                        let index = p.integer("shape_index")?.unwrap_or(0);
+                        let index = u32::try_from(index)
+                            .map_err(|_| p.error(format!("'shape_index' must be non-negative, got {index}")))?;
+                        crate::mesh::read_serialized(&path, index)?
+                    }
+                };
+                let face_normals = p.boolean_or("face_normals", false)?;
+                p.ignore(&["flip_tex_coords"]);
+                Geometry::Mesh(transform_mesh(
+                    mesh,
+                    &to_world,
+                    flip,
+                    face_normals,
+                    &node.pos,
+                    &what,
+                    &mut self.warnings,
+                )?)
+            }
+            "rectangle" => Geometry::Mesh(transform_mesh(
+                rectangle_mesh(),
+                &to_world,
+                flip,
+                false,
+                &node.pos,
+                &what,
+                &mut self.warnings,
+            )?),
+            "cube" => {
+                let face_normals = p.boolean_or("face_normals", false)?;
+                Geometry::Mesh(transform_mesh(
+                    cube_mesh(),
+                    &to_world,
+                    flip,
+                    face_normals,
+                    &node.pos,
+                    &what,
+                    &mut self.warnings,
+                )?)
+            }
+            "sphere" => {
+                let center = p.vector("center")?.unwrap_or([0.0; 3]);
+                let radius = p.float_or("radius", 1.0)?;
+                if !positive(radius) {
+                    return Err(p.error(format!("'radius' must be positive, got {radius}")));
+                }
+                let m = to_world.mul(&Mat4::translate(center)).mul(&Mat4::scale([radius; 3]));
+                let axes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|a| m.vector(a));
+                let lengths = axes.map(length);
+                let r = (lengths[0] + lengths[1] + lengths[2]) / 3.0;
+                let tolerance = 1e-4 * r;
+                let uniform = lengths.iter().all(|l| (l - r).abs() <= tolerance)
+                    && dot(axes[0], axes[1]).abs() <= tolerance * r
+                    && dot(axes[1], axes[2]).abs() <= tolerance * r
+                    && dot(axes[0], axes[2]).abs() <= tolerance * r;
+                if !uniform || !positive(r) {
+                    return Err(p.error(
+                        "'to_world' of a sphere must be a rotation, uniform scale and translation \
+                         (non-uniform scales would make an ellipsoid)",
+                    ));
+                }
+                Geometry::Sphere { center: to_vec3(m.point([0.0; 3])), radius: r as f32, flip_normals: flip }
+            }
+            "disk" => {
+                let u = to_world.vector([1.0, 0.0, 0.0]);
+                let v = to_world.vector([0.0, 1.0, 0.0]);
+                if normalize(cross(u, v)).is_none() {
+                    return Err(p.error("'to_world' collapses the disk"));
+                }
+                // Mitsuba's disk normal is the inverse transpose of +z, which is u × v turned
+                // around when to_world mirrors.
+                let mirrored = to_world.det3() < 0.0;
+                Geometry::Disk {
+                    center: to_vec3(to_world.point([0.0; 3])),
+                    axis_u: to_vec3(u),
+                    axis_v: to_vec3(v),
+                    flip_normals: flip != mirrored,
+                }
+            }
+            other => return Err(p.error(format!("unsupported shape type '{other}'"))),
+        };
+
+        let mut material = None;
+        let mut emission = None;
+        for object in &p.objects {
+            let child = object.node;
+            match child.tag.as_str() {
+                "bsdf" => {
+                    object.take();
+                    if material.is_some() {
+                        return Err(child.pos.error(format!("{what}: more than one bsdf")));
+                    }
+                    material = Some(self.material_for_node(child)?);
+                }
+                "emitter" => {
+                    object.take();
+                    if emission.is_some() {
+                        return Err(child.pos.error(format!("{what}: more than one emitter")));
+                    }
+                    let radiance = match child.attr("id") {
+                        Some(id) => {
+                            self.attached_emitters.insert(id.to_string());
+                            match self.resolve(id, child)? {
+                                Resolved::AreaEmitter(r) => r,
+                                _ => return Err(child.pos.error("only area emitters can be attached to shapes")),
+                            }
+                        }
+                        None => self.area_emitter(child)?,
+                    };
+                    emission = Some(radiance);
+                }
+                "ref" => {
+                    object.take();
+                    let id = child.required_attr("id")?;
+                    match self.resolve(id, child)? {
+                        Resolved::Bsdf(_) => {
+                            if material.is_some() {
+                                return Err(child.pos.error(format!("{what}: more than one bsdf")));
+                            }
+                            material = Some(self.material_for_id(id, child)?);
+                        }
+                        Resolved::AreaEmitter(r) => {
+                            if emission.is_some() {
+                                return Err(child.pos.error(format!("{what}: more than one emitter")));
+                            }
+                            self.attached_emitters.insert(id.to_string());
+                            emission = Some(r);
+                        }
+                        other => {
+                            return Err(child.pos.error(format!(
+                                "{what}: reference '{id}' is a {}, expected a bsdf or an area emitter",
+                                other.kind()
+                            )));
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        let material = match material {
+            Some(m) => m,
+            None => self.default_material(),
+        };
+        p.finish(&mut self.warnings);
+        let name = node.attr("id").map(str::to_string).unwrap_or_else(|| format!("{}#{}", p.ty, self.shapes.len()));
+        self.shapes.push(ShapeDesc { name, geometry, material, emission });
+        Ok(())
+    }
+}
