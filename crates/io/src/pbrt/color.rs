@@ -79,7 +79,7 @@ pub fn planck(lambda: f64, kelvin: f64) -> f64 {
 /// photometric normalisation of lights); `None` when the spectrum has no luminance.
 pub fn emission_rgb(s: impl Fn(f64) -> f64) -> Option<Rgb> {
     let xyz = spectrum_to_xyz(s);
-    if !(xyz[1] > 0.0) || !xyz[1].is_finite() {
+    if xyz[1] <= 0.0 || !xyz[1].is_finite() {
         return None;
     }
     let rgb = xyz_to_srgb(xyz.map(|c| c / xyz[1]));
@@ -113,14 +113,19 @@ pub fn piecewise_linear(pairs: &[f64]) -> Option<impl Fn(f64) -> f64> {
     if table.len() < 2 || table.windows(2).any(|w| w[1].0 <= w[0].0) {
         return None;
     }
-    Some(move |lambda: f64| {
-        if lambda < table[0].0 || lambda > table[table.len() - 1].0 { 0.0 } else { interpolate(&table, lambda) }
-    })
+    Some(
+        move |lambda: f64| {
+            if lambda < table[0].0 || lambda > table[table.len() - 1].0 { 0.0 } else { interpolate(&table, lambda) }
+        },
+    )
 }
 
 /// The samples of pbrt-v4's metal tables that bracket the three primary wavelengths: per metal,
 /// `(λ, η, k)` at 459.200653, 467.864838, 539.061646, 551.040771, 604.800842 and 619.920898 nm.
-const METAL_SAMPLES: [(&str, [(f64, f64, f64); 6]); 4] = [
+/// A metal's name and its `(λ, η, k)` samples.
+type MetalSamples = (&'static str, [(f64, f64, f64); 6]);
+
+const METAL_SAMPLES: [MetalSamples; 4] = [
     (
         "Cu",
         [
@@ -178,8 +183,7 @@ pub fn named_metal(name: &str) -> Option<Rgb> {
         _ => return None,
     };
     let (_, samples) = METAL_SAMPLES.iter().find(|(m, _)| *m == metal)?;
-    let table: Vec<(f64, f64)> =
-        samples.iter().map(|&(l, eta, k)| (l, if column == 0 { eta } else { k })).collect();
+    let table: Vec<(f64, f64)> = samples.iter().map(|&(l, eta, k)| (l, if column == 0 { eta } else { k })).collect();
     let [r, g, b] = PRIMARY_WAVELENGTHS.map(|l| interpolate(&table, l) as f32);
     Some(Rgb::new(r, g, b))
 }

@@ -64,7 +64,7 @@ use spectrum::Rgb;
 
 use crate::pbrt::parser::{Directive, ParamSet, Parser, Value};
 use crate::pbrt::tokenizer::Pos;
-use crate::pbrt::transform::{Mat4, V3, cross, dot, norm, normalize};
+use crate::pbrt::transform::{Mat4, V3, dot, norm, normalize};
 use crate::scene_error::SceneError;
 
 /// How deep `Include`s may nest (guards against include cycles).
@@ -211,7 +211,9 @@ impl Builder {
     }
 
     fn concat(&mut self, file: &Path, d: &Directive, m: Option<Mat4>) -> Result<(), SceneError> {
-        let m = m.filter(Mat4::is_finite).ok_or_else(|| err(file, d.pos, format!("{}: degenerate transformation", d.name)))?;
+        let m = m
+            .filter(Mat4::is_finite)
+            .ok_or_else(|| err(file, d.pos, format!("{}: degenerate transformation", d.name)))?;
         self.state.ctm = self.state.ctm.mul(&m);
         Ok(())
     }
@@ -223,7 +225,9 @@ impl Builder {
             "Translate" => self.concat(file, &d, Some(Mat4::translate([n[0], n[1], n[2]])))?,
             "Scale" => self.concat(file, &d, Some(Mat4::scale([n[0], n[1], n[2]])))?,
             "Rotate" => self.concat(file, &d, Mat4::rotate(n[0], [n[1], n[2], n[3]]))?,
-            "LookAt" => self.concat(file, &d, Mat4::look_at([n[0], n[1], n[2]], [n[3], n[4], n[5]], [n[6], n[7], n[8]]))?,
+            "LookAt" => {
+                self.concat(file, &d, Mat4::look_at([n[0], n[1], n[2]], [n[3], n[4], n[5]], [n[6], n[7], n[8]]))?
+            }
             "ConcatTransform" => self.concat(file, &d, Some(Mat4::from_pbrt_list(&n)))?,
             "Transform" => {
                 let m = Mat4::from_pbrt_list(&n);
@@ -246,11 +250,17 @@ impl Builder {
             "TransformTimes" => self.warn(file, d.pos, "TransformTimes ignored (no motion blur)"),
             "ActiveTransform" => {
                 if d.str_arg(0) != "All" {
-                    return Err(err(file, d.arg_pos[0], format!("ActiveTransform {}: animated transformations (motion blur) are not supported", d.str_arg(0))));
+                    return Err(err(
+                        file,
+                        d.arg_pos[0],
+                        format!(
+                            "ActiveTransform {}: animated transformations (motion blur) are not supported",
+                            d.str_arg(0)
+                        ),
+                    ));
                 }
             }
             "AttributeBegin" | "TransformBegin" => {
-                self.require_world_any();
                 let block = if d.name == "AttributeBegin" { Block::Attribute } else { Block::Transform };
                 self.stack.push((self.state.clone(), block, file.to_path_buf(), d.pos));
             }
@@ -260,7 +270,11 @@ impl Builder {
                 match self.stack.pop() {
                     None => return Err(err(file, d.pos, format!("{} without a matching {begin}", d.name))),
                     Some((_, b, f, p)) if b != block => {
-                        return Err(err(file, d.pos, format!("{} closes the block opened at {}:{}:{}", d.name, f.display(), p.line, p.column)));
+                        return Err(err(
+                            file,
+                            d.pos,
+                            format!("{} closes the block opened at {}:{}:{}", d.name, f.display(), p.line, p.column),
+                        ));
                     }
                     Some((saved, Block::Attribute, ..)) => self.state = saved,
                     Some((saved, Block::Transform, ..)) => self.state.ctm = saved.ctm,
@@ -277,7 +291,11 @@ impl Builder {
             }
             "ColorSpace" => {
                 if d.str_arg(0) != "srgb" {
-                    return Err(err(file, d.arg_pos[0], format!("color space \"{}\" is not supported (only srgb)", d.str_arg(0))));
+                    return Err(err(
+                        file,
+                        d.arg_pos[0],
+                        format!("color space \"{}\" is not supported (only srgb)", d.str_arg(0)),
+                    ));
                 }
             }
             "Camera" => {
@@ -312,7 +330,11 @@ impl Builder {
             "WorldEnd" => self.warn(file, d.pos, "WorldEnd (pbrt-v3) ignored"),
             "Include" | "Import" => {
                 if depth + 1 >= MAX_INCLUDE_DEPTH {
-                    return Err(err(file, d.pos, format!("{}s nested deeper than {MAX_INCLUDE_DEPTH} (a cycle?)", d.name)));
+                    return Err(err(
+                        file,
+                        d.pos,
+                        format!("{}s nested deeper than {MAX_INCLUDE_DEPTH} (a cycle?)", d.name),
+                    ));
                 }
                 let target = resolve(file, d.str_arg(0));
                 self.run_file(&target, Some((file, d.arg_pos[0])), depth + 1)?;
@@ -320,7 +342,9 @@ impl Builder {
             "ObjectBegin" | "ObjectEnd" | "ObjectInstance" => {
                 return Err(err(file, d.pos, format!("{}: object instancing is not supported", d.name)));
             }
-            "MakeNamedMedium" => return Err(err(file, d.pos, "MakeNamedMedium: participating media are not supported")),
+            "MakeNamedMedium" => {
+                return Err(err(file, d.pos, "MakeNamedMedium: participating media are not supported"));
+            }
             "MediumInterface" => {
                 if d.args.iter().any(|a| !matches!(a, parser::Arg::Str(s) if s.is_empty())) {
                     return Err(err(file, d.pos, "MediumInterface: participating media are not supported"));
@@ -384,9 +408,6 @@ impl Builder {
         Ok(())
     }
 
-    /// pbrt allows attribute blocks before WorldBegin too; nothing to check.
-    fn require_world_any(&self) {}
-
     fn finish(self, path: &Path) -> Result<SceneDescription, SceneError> {
         let (width, height) = self.resolution;
         let spec = self.camera.clone().unwrap_or(CameraSpec {
@@ -436,11 +457,8 @@ impl Builder {
                 return Err(p.error(x.pos, format!("parameter '{name}' is not supported")));
             }
         }
-        let world_from_camera = self
-            .state
-            .ctm
-            .inverse()
-            .ok_or_else(|| err(file, d.pos, "the camera transformation is singular"))?;
+        let world_from_camera =
+            self.state.ctm.inverse().ok_or_else(|| err(file, d.pos, "the camera transformation is singular"))?;
         self.named_coordinate_systems.insert("camera".into(), world_from_camera);
         self.camera = Some(CameraSpec {
             world_from_camera,
@@ -458,7 +476,11 @@ impl Builder {
     fn film_directive(&mut self, d: &Directive) -> Result<(), SceneError> {
         let ty = d.str_arg(0);
         if !matches!(ty, "rgb" | "gbuffer" | "spectral") {
-            return Err(err(&d.params.file, d.arg_pos[0], format!("unknown film type \"{ty}\" (expected rgb or gbuffer)")));
+            return Err(err(
+                &d.params.file,
+                d.arg_pos[0],
+                format!("unknown film type \"{ty}\" (expected rgb or gbuffer)"),
+            ));
         }
         let p = &d.params;
         let mut res = [0u32; 2];
@@ -540,17 +562,24 @@ impl Builder {
                     if albedo {
                         return Err(p.error(pos, format!("named spectrum \"{s}\" cannot be a reflectance")));
                     }
-                    color::named_metal(s).ok_or_else(|| p.error(pos, format!("unknown or unsupported named spectrum \"{s}\"")))?
+                    color::named_metal(s)
+                        .ok_or_else(|| p.error(pos, format!("unknown or unsupported named spectrum \"{s}\"")))?
                 }
                 [Value::Num(x)] => Rgb::splat(*x as f32),
                 _ => {
                     let v = param.numbers();
                     if albedo {
-                        return Err(p.error(pos, format!("parameter '{name}': sampled reflectance spectra are not supported (use rgb)")));
+                        return Err(p.error(
+                            pos,
+                            format!("parameter '{name}': sampled reflectance spectra are not supported (use rgb)"),
+                        ));
                     }
-                    let s = color::piecewise_linear(&v)
-                        .filter(|_| v.len() % 2 == 0)
-                        .ok_or_else(|| p.error(pos, format!("parameter '{name}': expected wavelength/value pairs with increasing wavelengths")))?;
+                    let s = color::piecewise_linear(&v).filter(|_| v.len() % 2 == 0).ok_or_else(|| {
+                        p.error(
+                            pos,
+                            format!("parameter '{name}': expected wavelength/value pairs with increasing wavelengths"),
+                        )
+                    })?;
                     let [r, g, b] = color::PRIMARY_WAVELENGTHS.map(|l| s(l) as f32);
                     Rgb::new(r, g, b)
                 }
@@ -564,10 +593,15 @@ impl Builder {
                     None => Err(p.error(pos, format!("unknown texture \"{t}\""))),
                 };
             }
-            other => return Err(p.error(pos, format!("parameter '{name}' has type '{other}', expected rgb, spectrum, float or texture"))),
+            other => {
+                return Err(p.error(
+                    pos,
+                    format!("parameter '{name}' has type '{other}', expected rgb, spectrum, float or texture"),
+                ));
+            }
         };
         if !value.is_finite() || (albedo && (value.r.min(value.g).min(value.b) < 0.0 || value.max_component() > 1.0)) {
-            return Err(p.error(pos, format!("reflectance {name} = ({}, {}, {}) is outside [0, 1]", value.r, value.g, value.b)));
+            return Err(p.error(pos, format!("{name} = ({}, {}, {}) is outside [0, 1]", value.r, value.g, value.b)));
         }
         Ok(Texture::Constant(value))
     }
@@ -583,11 +617,16 @@ impl Builder {
                 };
                 match self.textures.get(t).map(|x| &x.texture) {
                     Some(Texture::Constant(c)) => Ok(c.r),
-                    Some(_) => Err(p.error(param.pos, format!("parameter '{name}': only constant textures are supported here"))),
+                    Some(_) => {
+                        Err(p
+                            .error(param.pos, format!("parameter '{name}': only constant textures are supported here")))
+                    }
                     None => Err(p.error(param.pos, format!("unknown texture \"{t}\""))),
                 }
             }
-            other => Err(p.error(param.pos, format!("parameter '{name}' has type '{other}', expected float or texture"))),
+            other => {
+                Err(p.error(param.pos, format!("parameter '{name}' has type '{other}', expected float or texture")))
+            }
         }
     }
 
@@ -615,14 +654,22 @@ impl Builder {
                 }
                 [Value::Num(_)] => normalised(&|_| 1.0)?,
                 _ => {
-                    let s = color::piecewise_linear(&nums)
-                        .filter(|_| nums.len() % 2 == 0)
-                        .ok_or_else(|| p.error(pos, format!("parameter '{name}': expected wavelength/value pairs with increasing wavelengths")))?;
+                    let s = color::piecewise_linear(&nums).filter(|_| nums.len() % 2 == 0).ok_or_else(|| {
+                        p.error(
+                            pos,
+                            format!("parameter '{name}': expected wavelength/value pairs with increasing wavelengths"),
+                        )
+                    })?;
                     normalised(&s)?
                 }
             },
             "float" => normalised(&|_| 1.0)?,
-            other => return Err(p.error(pos, format!("parameter '{name}' has type '{other}', expected rgb, spectrum or blackbody"))),
+            other => {
+                return Err(p.error(
+                    pos,
+                    format!("parameter '{name}' has type '{other}', expected rgb, spectrum or blackbody"),
+                ));
+            }
         };
         if !rgb.is_finite() {
             return Err(p.error(pos, format!("parameter '{name}' is not finite")));
@@ -693,7 +740,9 @@ impl Builder {
                     None => false,
                     Some((e, _)) if e == "sRGB" => false,
                     Some((e, _)) if e == "linear" => is_png,
-                    Some((e, epos)) => return Err(p.error(epos, format!("encoding \"{e}\" is not supported (sRGB or linear)"))),
+                    Some((e, epos)) => {
+                        return Err(p.error(epos, format!("encoding \"{e}\" is not supported (sRGB or linear)")));
+                    }
                 };
                 let scale = p.float("scale", 1.0)?;
                 let invert = p.bool("invert", false)?;
@@ -713,8 +762,7 @@ impl Builder {
                         Rgb::from_array(c)
                     })
                     .collect();
-                let image =
-                    Arc::new(TextureImage { width: image.width as u32, height: image.height as u32, pixels });
+                let image = Arc::new(TextureImage { width: image.width as u32, height: image.height as u32, pixels });
                 // pbrt looks up (s, 1 − t): t = 0 is the bottom row; our v' runs from the top.
                 Texture::Bitmap {
                     image,
@@ -740,7 +788,9 @@ impl Builder {
         let u = if p.find("uroughness").is_some() { self.constant_float(p, "uroughness", r)? } else { r };
         let v = if p.find("vroughness").is_some() { self.constant_float(p, "vroughness", r)? } else { r };
         if !(u >= 0.0 && v >= 0.0 && u.is_finite() && v.is_finite()) {
-            return Err(p.error(p.params.first().map_or(Pos { line: 0, column: 0 }, |x| x.pos), "roughness must be ≥ 0"));
+            return Err(
+                p.error(p.params.first().map_or(Pos { line: 0, column: 0 }, |x| x.pos), "roughness must be ≥ 0")
+            );
         }
         let remap = p.bool("remaproughness", true)?;
         Ok(if remap { (u.sqrt(), v.sqrt()) } else { (u, v) })
@@ -750,7 +800,9 @@ impl Builder {
         let p = &d.params;
         let two_sided = |m: Material| Material::TwoSided { front: Box::new(m), back: None };
         Ok(match ty {
-            "diffuse" => two_sided(Material::Diffuse { reflectance: self.spectrum_texture(p, "reflectance", Rgb::splat(0.5), true)? }),
+            "diffuse" => two_sided(Material::Diffuse {
+                reflectance: self.spectrum_texture(p, "reflectance", Rgb::splat(0.5), true)?,
+            }),
             "conductor" => {
                 let (alpha_u, alpha_v) = self.roughness(p)?;
                 let (eta, k, specular_reflectance) = if p.find("reflectance").is_some() {
@@ -786,11 +838,21 @@ impl Builder {
                 let eta = self.ior(p)?;
                 let white = || Texture::Constant(Rgb::WHITE);
                 if ty == "thindielectric" {
-                    Material::ThinDielectric { int_ior: eta, ext_ior: 1.0, specular_reflectance: white(), specular_transmittance: white() }
+                    Material::ThinDielectric {
+                        int_ior: eta,
+                        ext_ior: 1.0,
+                        specular_reflectance: white(),
+                        specular_transmittance: white(),
+                    }
                 } else {
                     let (alpha_u, alpha_v) = self.roughness(p)?;
                     if alpha_u.max(alpha_v) < SMOOTH_ALPHA {
-                        Material::Dielectric { int_ior: eta, ext_ior: 1.0, specular_reflectance: white(), specular_transmittance: white() }
+                        Material::Dielectric {
+                            int_ior: eta,
+                            ext_ior: 1.0,
+                            specular_reflectance: white(),
+                            specular_transmittance: white(),
+                        }
                     } else {
                         Material::RoughDielectric {
                             alpha_u,
@@ -824,7 +886,12 @@ impl Builder {
                 Material::Blend { weight, first: lookup(&names[0])?, second: lookup(&names[1])? }
             }
             "interface" => return Err(err(file, d.pos, "material \"interface\" (media boundaries) is not supported")),
-            other @ ("coateddiffuse" | "coatedconductor" | "diffusetransmission" | "hair" | "measured" | "subsurface") => {
+            other @ ("coateddiffuse"
+            | "coatedconductor"
+            | "diffusetransmission"
+            | "hair"
+            | "measured"
+            | "subsurface") => {
                 return Err(err(file, d.pos, format!("material \"{other}\" is not supported")));
             }
             other => return Err(err(file, d.pos, format!("unknown material type \"{other}\""))),
@@ -835,7 +902,10 @@ impl Builder {
     fn unbounded(&self, p: &ParamSet, name: &str, default: &str) -> Result<Rgb, SceneError> {
         match self.spectrum_texture(p, name, color::named_metal(default).unwrap_or(Rgb::WHITE), false)? {
             Texture::Constant(c) => Ok(c),
-            _ => Err(p.error(p.find(name).map_or(Pos { line: 0, column: 0 }, |x| x.pos), format!("textured '{name}' is not supported"))),
+            _ => Err(p.error(
+                p.find(name).map_or(Pos { line: 0, column: 0 }, |x| x.pos),
+                format!("textured '{name}' is not supported"),
+            )),
         }
     }
 
@@ -889,19 +959,29 @@ impl Builder {
         if !ctm.is_affine() {
             return Err(err(file, d.pos, "shapes under a projective transformation are not supported"));
         }
-        let name = format!("{ty} ({}:{})", file.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned()), d.pos.line);
+        let name = format!(
+            "{ty} ({}:{})",
+            file.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+            d.pos.line
+        );
         let geometry = match ty {
             "trianglemesh" | "bilinearmesh" => {
                 let quads = ty == "bilinearmesh";
                 let corners = if quads { 4 } else { 3 };
-                let Some((positions, ppos)) = p.numbers("P", &["point3"], 3)? else {
+                let Some((positions, _)) = p.numbers("P", &["point3"], 3)? else {
                     return Err(err(file, d.pos, format!("{ty} needs \"point3 P\"")));
                 };
                 let count = positions.len() / 3;
                 let indices = match p.ints("indices")? {
                     Some(i) => i,
                     None if count == corners => (0..corners as i64).collect(),
-                    None => return Err(err(file, d.pos, format!("{ty} needs \"integer indices\" (it has {count} vertices)"))),
+                    None => {
+                        return Err(err(
+                            file,
+                            d.pos,
+                            format!("{ty} needs \"integer indices\" (it has {count} vertices)"),
+                        ));
+                    }
                 };
                 let ipos = p.find("indices").map_or(d.pos, |x| x.pos);
                 if indices.len() % corners != 0 {
@@ -922,7 +1002,6 @@ impl Builder {
                         return Err(p.error(*pos, format!("{} values of '{what}' for {count} vertices", v.len() / per)));
                     }
                 }
-                let _ = ppos;
                 let mut triangles = Vec::new();
                 for c in indices.chunks(corners) {
                     let c: Vec<u32> = c.iter().map(|&i| i as u32).collect();
@@ -939,7 +1018,9 @@ impl Builder {
                     normals: normals.map_or_else(Vec::new, |(v, _)| {
                         v.chunks(3).map(|n| Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32)).collect()
                     }),
-                    uvs: uvs.map_or_else(Vec::new, |(v, _)| v.chunks(2).map(|t| Vec2::new(t[0] as f32, t[1] as f32)).collect()),
+                    uvs: uvs.map_or_else(Vec::new, |(v, _)| {
+                        v.chunks(2).map(|t| Vec2::new(t[0] as f32, t[1] as f32)).collect()
+                    }),
                     triangles,
                 };
                 Geometry::Mesh(self.to_world_mesh(file, d.pos, object)?)
@@ -1039,7 +1120,11 @@ impl Builder {
 
     fn area_light_directive(&mut self, file: &Path, d: &Directive) -> Result<(), SceneError> {
         if d.str_arg(0) != "diffuse" {
-            return Err(err(file, d.arg_pos[0], format!("unknown area light type \"{}\" (expected diffuse)", d.str_arg(0))));
+            return Err(err(
+                file,
+                d.arg_pos[0],
+                format!("unknown area light type \"{}\" (expected diffuse)", d.str_arg(0)),
+            ));
         }
         let p = &d.params;
         for name in ["filename", "power"] {
@@ -1078,7 +1163,7 @@ impl Builder {
             "point" => {
                 let mut intensity = self.light_spectrum(p, "I")? * scale;
                 if let Some(power) = p.float_opt("power")? {
-                    intensity = intensity * (power / (4.0 * std::f32::consts::PI));
+                    intensity *= power / (4.0 * std::f32::consts::PI);
                 }
                 LightDesc::Point { position: f32v(ctm.point(point3("from", [0.0; 3])?)), intensity }
             }
@@ -1094,7 +1179,7 @@ impl Builder {
                 if let Some(power) = p.float_opt("power")? {
                     let (cos_end, cos_start) = (cone.to_radians().cos(), (cone - delta).to_radians().cos());
                     let k = 2.0 * std::f32::consts::PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0);
-                    intensity = intensity * (power / k);
+                    intensity *= power / k;
                 }
                 LightDesc::Spot {
                     position: f32v(ctm.point(from)),
@@ -1109,7 +1194,7 @@ impl Builder {
                 let to = point3("to", [0.0, 0.0, 1.0])?;
                 let mut irradiance = self.light_spectrum(p, "L")? * scale;
                 if let Some(e) = p.float_opt("illuminance")? {
-                    irradiance = irradiance * e;
+                    irradiance *= e;
                 }
                 LightDesc::Directional { direction: direction(from, to)?, irradiance }
             }
@@ -1129,7 +1214,8 @@ impl Builder {
                             return Err(p.error(x.pos, "'L' and 'filename' exclude each other"));
                         }
                         let path = resolve(file, &filename);
-                        let image = crate::read_image(&path).map_err(|e| p.error(fpos, format!("cannot read image: {e}")))?;
+                        let image =
+                            crate::read_image(&path).map_err(|e| p.error(fpos, format!("cannot read image: {e}")))?;
                         if image.width != image.height {
                             return Err(p.error(
                                 fpos,
@@ -1220,6 +1306,5 @@ fn camera_desc(spec: &CameraSpec, width: u32, height: u32) -> Result<CameraDesc,
             Projection::Perspective { horizontal_fov_degrees }
         }
     };
-    let _ = cross;
     Ok(CameraDesc { position: f32v(w.point([0.0; 3])), forward: f32v(f), up: f32v(u), right: f32v(r), projection })
 }

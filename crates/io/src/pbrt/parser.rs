@@ -225,8 +225,8 @@ impl<'a> Parser<'a> {
                 }
                 _ if k >= signature.strings => break,
                 other => {
-                    let (pos, found) =
-                        other.map_or((self.end_pos(), "the end of the file".to_string()), |t| (t.pos, describe(&t.kind)));
+                    let (pos, found) = other
+                        .map_or((self.end_pos(), "the end of the file".to_string()), |t| (t.pos, describe(&t.kind)));
                     return Err(self.error(pos, format!("{name} expects a quoted string, found {found}")));
                 }
             }
@@ -272,7 +272,8 @@ impl<'a> Parser<'a> {
     fn parameter(&mut self, directive: &str, decl: &str, pos: Pos) -> Result<Param, SceneError> {
         let words: Vec<&str> = decl.split_whitespace().collect();
         let [ty, name] = words[..] else {
-            return Err(self.error(pos, format!("{directive}: expected a parameter declaration \"type name\", found \"{decl}\"")));
+            return Err(self
+                .error(pos, format!("{directive}: expected a parameter declaration \"type name\", found \"{decl}\"")));
         };
         let ty = match ty {
             "point" => "point3",
@@ -308,7 +309,10 @@ impl<'a> Parser<'a> {
                                 values.push((v, t.pos));
                             }
                             None => {
-                                return Err(self.error(t.pos, format!("parameter \"{decl}\": unexpected {} in a value list", describe(&t.kind))));
+                                return Err(self.error(
+                                    t.pos,
+                                    format!("parameter \"{decl}\": unexpected {} in a value list", describe(&t.kind)),
+                                ));
                             }
                         },
                         None => return Err(self.error(pos, format!("parameter \"{decl}\": missing ']'"))),
@@ -337,7 +341,9 @@ impl<'a> Parser<'a> {
                 _ => matches!(value, Value::Num(_)),
             };
             if !ok {
-                return Err(self.error(*vpos, format!("parameter \"{decl}\": value {} does not fit type '{ty}'", show(value))));
+                return Err(
+                    self.error(*vpos, format!("parameter \"{decl}\": value {} does not fit type '{ty}'", show(value)))
+                );
             }
         }
         let values = values
@@ -386,10 +392,9 @@ impl ParamSet {
     pub fn typed(&self, name: &str, types: &[&str]) -> Result<Option<&Param>, SceneError> {
         let Some(p) = self.find(name) else { return Ok(None) };
         if !types.contains(&p.ty.as_str()) {
-            return Err(self.error(
-                p.pos,
-                format!("parameter '{name}' has type '{}', expected {}", p.ty, types.join(" or ")),
-            ));
+            return Err(
+                self.error(p.pos, format!("parameter '{name}' has type '{}', expected {}", p.ty, types.join(" or ")))
+            );
         }
         Ok(Some(p))
     }
@@ -399,10 +404,8 @@ impl ParamSet {
         let Some(p) = self.typed(name, types)? else { return Ok(None) };
         let values = p.numbers();
         if values.is_empty() || values.len() % group != 0 {
-            return Err(self.error(
-                p.pos,
-                format!("parameter '{name}' needs a multiple of {group} values, got {}", values.len()),
-            ));
+            return Err(self
+                .error(p.pos, format!("parameter '{name}' needs a multiple of {group} values, got {}", values.len())));
         }
         Ok(Some((values, p.pos)))
     }

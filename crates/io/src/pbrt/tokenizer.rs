@@ -78,7 +78,9 @@ pub fn tokenize(file: &Path, text: &str) -> Result<Vec<Token>, SceneError> {
                 column += 1;
                 match c {
                     '"' => break,
-                    '\n' => return Err(SceneError::at(file, pos.line, pos.column, "string runs past the end of the line")),
+                    '\n' => {
+                        return Err(SceneError::at(file, pos.line, pos.column, "string runs past the end of the line"));
+                    }
                     '\\' => {
                         let escaped = chars.get(i).copied();
                         i += 1;
@@ -94,7 +96,10 @@ pub fn tokenize(file: &Path, text: &str) -> Result<Vec<Token>, SceneError> {
                                     file,
                                     line,
                                     column.saturating_sub(2),
-                                    format!("unknown escape sequence \\{}", other.map(String::from).unwrap_or_default()),
+                                    format!(
+                                        "unknown escape sequence \\{}",
+                                        other.map(String::from).unwrap_or_default()
+                                    ),
                                 ));
                             }
                         }
