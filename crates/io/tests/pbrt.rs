@@ -785,6 +785,16 @@ fn errors_name_file_line_and_column() {
             "scene.pbrt:2:16: Shape: unexpected number 3, expected a parameter declaration",
         ),
         (
+            "odd_spectrum",
+            "WorldBegin\nLightSource \"point\" \"spectrum I\" [400 1 700]\n",
+            "scene.pbrt:2:21: LightSource \"point\": parameter 'I': expected wavelength/value pairs with increasing wavelengths",
+        ),
+        (
+            "mixed_spectrum",
+            "WorldBegin\nMaterial \"dielectric\" \"spectrum eta\" [\"glass-BK7\" 1]\n",
+            "scene.pbrt:2:23: Material \"dielectric\": eta: expected wavelength/value pairs with increasing wavelengths",
+        ),
+        (
             "index_range",
             "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 3]\n",
             "scene.pbrt:2:53: Shape \"trianglemesh\": index 3 is out of range (there are 3 vertices)",

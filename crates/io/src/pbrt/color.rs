@@ -109,7 +109,10 @@ fn interpolate(table: &[(f64, f64)], lambda: f64) -> f64 {
 /// A piecewise-linear spectrum given as `λ₀ v₀ λ₁ v₁ …` (pbrt's inline `"spectrum"` values),
 /// zero outside its range as in pbrt. `None` if the wavelengths are not increasing.
 pub fn piecewise_linear(pairs: &[f64]) -> Option<impl Fn(f64) -> f64> {
-    let table: Vec<(f64, f64)> = pairs.chunks(2).map(|c| (c[0], c[1])).collect();
+    if pairs.len() % 2 != 0 {
+        return None;
+    }
+    let table: Vec<(f64, f64)> = pairs.chunks_exact(2).map(|c| (c[0], c[1])).collect();
     if table.len() < 2 || table.windows(2).any(|w| w[1].0 <= w[0].0) {
         return None;
     }
