@@ -941,3 +941,25 @@ fn cornell_box_twin_matches_the_mitsuba_scene() {
         assert!((area - expected_area).abs() < 1e-5 * expected_area, "{area} vs {expected_area}");
     }
 }
+
+#[test]
+fn truncated_files_error_with_a_position_and_never_panic() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.pbrt");
+    let text = fs::read_to_string(path).unwrap();
+    let dir = scratch_dir("truncated");
+    let file = dir.join("cut.pbrt");
+    let (mut ok, mut errors) = (0, 0);
+    for cut in (0..text.len()).step_by(13).filter(|&i| text.is_char_boundary(i)) {
+        fs::write(&file, &text[..cut]).unwrap();
+        match io::pbrt::load(&file) {
+            Ok(_) => ok += 1,
+            Err(e) => {
+                errors += 1;
+                assert_eq!(e.file, file);
+                assert!(e.line.is_some(), "cut at {cut}: {e}");
+            }
+        }
+    }
+    // Cutting inside an attribute block (most of the file) leaves it unclosed.
+    assert!(errors > ok, "{errors} errors, {ok} loads");
+}
