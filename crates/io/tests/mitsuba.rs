@@ -913,7 +913,6 @@ fn mesh_scene(relative: &str, shapes: usize) -> Option<SceneDescription> {
 }
 
 #[test]
-#[ignore = "needs mesh readers"]
 fn caustic_cbox_xml() {
     let Some(s) = mesh_scene("caustic-cbox/cbox.xml", 8) else { return };
     assert_eq!(s.max_path_length, Some(6));
@@ -929,7 +928,6 @@ fn caustic_cbox_xml() {
 }
 
 #[test]
-#[ignore = "needs mesh readers"]
 fn cbox_classic_xml() {
     for file in ["cbox-classic/cbox.xml", "cbox-classic/cbox-rgb.xml", "cbox-classic/cbox-spectral.xml"] {
         let Some(s) = mesh_scene(file, 8) else { return };
@@ -939,7 +937,6 @@ fn cbox_classic_xml() {
 }
 
 #[test]
-#[ignore = "needs mesh readers"]
 fn veach_mis_xml() {
     let Some(s) = mesh_scene("veach-mis/veach_mis_path.xml", 10) else { return };
     assert_eq!(s.max_path_length, Some(8));
@@ -949,7 +946,6 @@ fn veach_mis_xml() {
 }
 
 #[test]
-#[ignore = "needs mesh readers"]
 fn matpreview_xml() {
     let Some(s) = mesh_scene("matpreview/matpreview.xml", 3) else { return };
     assert_eq!((s.film.width, s.film.height), (683, 512));

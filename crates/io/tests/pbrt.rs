@@ -337,7 +337,6 @@ fn spheres_and_disks() {
 }
 
 #[test]
-#[ignore = "needs mesh readers"]
 fn plymesh_is_read_and_transformed() {
     let dir = scratch_dir("plymesh");
     fs::write(
