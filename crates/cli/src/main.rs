@@ -5,6 +5,7 @@
 mod bench_accel;
 mod checkpoint;
 mod compare;
+mod report;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -36,6 +37,8 @@ enum Command {
     Bench(BenchArgs),
     /// Compare two images (RMSE, relative MSE, means, optional per-pixel Z-test).
     Compare(compare::CompareArgs),
+    /// Render scenes with several algorithms at equal time and write an HTML comparison.
+    Report(report::ReportArgs),
 }
 
 /// Algorithm names as the command line spells them.
@@ -667,6 +670,7 @@ fn main() -> ExitCode {
         }
         Command::Bench(args) => run_bench(args).map(|()| ExitCode::SUCCESS),
         Command::Compare(args) => compare::run(args),
+        Command::Report(args) => report::run(args).map(|()| ExitCode::SUCCESS),
     };
     match outcome {
         Ok(code) => code,
