@@ -81,7 +81,7 @@ impl Scene {
         let bounds: Vec<Aabb> = primitives.iter().map(|p| p.shape.bounds()).collect();
         let scene_box = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
         let (center, radius) = if scene_box.is_empty() { (Vec3::ZERO, 1.0) } else { scene_box.bounding_sphere() };
-        let background = lights.iter().position(|l| matches!(l, Light::Background(_))).map(|i| i as u32);
+        let background = lights.iter().position(Light::is_environment).map(|i| i as u32);
         let bvh = Bvh::build(&bounds);
         Self {
             name: name.into(),
