@@ -299,7 +299,8 @@ struct EnvMapData {
 impl EnvMapLight {
     /// Builds the light from a `width × height` image (at least 1 × 2 pixels), a scale factor
     /// applied to every pixel and the local-to-world rotation (columns; orthonormal within
-    /// 1e-3). Negative pixel values are clamped to zero; non-finite ones are an error.
+    /// 1e-3, a reflection is accepted too). Negative pixel values are clamped to zero;
+    /// non-finite ones are an error.
     pub fn new(image: &TextureImage, scale: f32, to_world: [Vec3; 3]) -> Result<Self, String> {
         let (width, height) = (image.width as usize, image.height as usize);
         if width < 1 || height < 2 {
@@ -325,9 +326,11 @@ impl EnvMapLight {
         }
         for (i, a) in to_world.iter().enumerate() {
             for (j, b) in to_world.iter().enumerate() {
-                let expected = if i == j { 1.0 } else { 0.0 };
-                if !(a.dot(*b) - expected).abs().le(&1e-3) {
-                    return Err(format!("environment map: to_world must be a rotation, got columns {to_world:?}"));
+                let error = (a.dot(*b) - if i == j { 1.0 } else { 0.0 }).abs();
+                if error.is_nan() || error > 1e-3 {
+                    return Err(format!(
+                        "environment map: to_world must be a rotation (orthonormal columns), got columns {to_world:?}"
+                    ));
                 }
             }
         }
