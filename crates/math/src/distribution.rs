@@ -1,7 +1,13 @@
-//! Discrete distributions sampled by inverting their cumulative sum.
+//! Discrete distributions sampled by inverting their cumulative sum, and the piecewise-constant
+//! 2D density built from them (environment-map importance sampling).
+
+use glam::Vec2;
+
+/// The largest `f32` below 1: continuous samples stay in `[0, 1)`.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// A distribution over `0..n` proportional to non-negative weights.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Distribution1D {
     cdf: Vec<f32>,
     total: f32,
@@ -48,6 +54,123 @@ impl Distribution1D {
         let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
         (self.cdf[i] - lo) / self.total
     }
+
+    /// Sum of the weights.
+    pub fn total(&self) -> f32 {
+        self.total
+    }
+
+    /// Samples the piecewise-constant density on `[0, 1)` whose `n` equal bins carry the
+    /// weights: returns the point `x ∈ [0, 1)` and its density per unit length,
+    /// `n · probability(bin)`. The point is `u` remapped within its bin, so the map is monotonic,
+    /// and `x` always lies in the bin whose probability is reported.
+    pub fn sample_continuous(&self, u: f32) -> (f32, f32) {
+        let (x, pdf, _) = self.sample_continuous_bin(u);
+        (x, pdf)
+    }
+
+    /// [`Distribution1D::sample_continuous`] that also returns the bin.
+    fn sample_continuous_bin(&self, u: f32) -> (f32, f32, usize) {
+        let (index, probability) = self.sample(u);
+        let lo = if index == 0 { 0.0 } else { self.cdf[index - 1] };
+        let width = self.cdf[index] - lo;
+        let offset = if width > 0.0 { ((u * self.total - lo) / width).clamp(0.0, 1.0) } else { 0.5 };
+        let n = self.len();
+        let mut x = (((index as f64 + offset as f64) / n as f64) as f32).min(ONE_MINUS_EPSILON);
+        // Rounding must not move the point into the next bin (the pdf looks the bin up the same
+        // way).
+        while x > 0.0 && bin_of(x, n) > index {
+            x = f32::from_bits(x.to_bits() - 1);
+        }
+        while bin_of(x, n) < index {
+            x = f32::from_bits(x.to_bits() + 1);
+        }
+        (x, probability * n as f32, index)
+    }
+
+    /// Density per unit length of [`Distribution1D::sample_continuous`] at `x ∈ [0, 1]`
+    /// (0 outside).
+    pub fn pdf_continuous(&self, x: f32) -> f32 {
+        if !(0.0..=1.0).contains(&x) {
+            return 0.0;
+        }
+        self.probability(bin_of(x, self.len())) * self.len() as f32
+    }
+}
+
+/// The bin of `x ∈ [0, 1]` among `n` equal bins.
+#[inline]
+fn bin_of(x: f32, n: usize) -> usize {
+    ((x * n as f32) as usize).min(n - 1)
+}
+
+/// A piecewise-constant density on the unit square `[0, 1)²` over a grid of `width × height`
+/// equal cells, proportional to non-negative cell weights: a marginal distribution over the rows
+/// (`y`) and a conditional distribution over the columns (`x`) of each row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Distribution2D {
+    marginal: Distribution1D,
+    conditional: Vec<Distribution1D>,
+}
+
+impl Distribution2D {
+    /// Builds the distribution from `width × height` weights in row-major order (row `y`, column
+    /// `x` at `y·width + x`). Returns `None` when the size does not match, a weight is negative or
+    /// not finite, or all are zero.
+    pub fn new(weights: &[f32], width: usize, height: usize) -> Option<Self> {
+        if width == 0 || height == 0 || weights.len() != width.checked_mul(height)? {
+            return None;
+        }
+        let mut conditional = Vec::with_capacity(height);
+        let mut row_sums = Vec::with_capacity(height);
+        for row in weights.chunks_exact(width) {
+            if row.iter().any(|w| !w.is_finite() || *w < 0.0) {
+                return None;
+            }
+            let sum: f64 = row.iter().map(|w| *w as f64).sum();
+            row_sums.push(sum as f32);
+            // A row without weight is never chosen; give it a uniform conditional so that every
+            // row has one.
+            conditional.push(match Distribution1D::new(row) {
+                Some(d) => d,
+                None => Distribution1D::new(&vec![1.0; width])?,
+            });
+        }
+        let marginal = Distribution1D::new(&row_sums)?;
+        Some(Self { marginal, conditional })
+    }
+
+    /// Number of columns.
+    pub fn width(&self) -> usize {
+        self.conditional[0].len()
+    }
+
+    /// Number of rows.
+    pub fn height(&self) -> usize {
+        self.marginal.len()
+    }
+
+    /// Sum of all weights.
+    pub fn total(&self) -> f32 {
+        self.marginal.total()
+    }
+
+    /// Samples a point of `[0, 1)²` with two uniform numbers (`u[1]` picks the row, `u[0]` the
+    /// position within it); returns the point and its density per unit area of the square.
+    pub fn sample(&self, u: [f32; 2]) -> (Vec2, f32) {
+        let (y, pdf_y, row) = self.marginal.sample_continuous_bin(u[1]);
+        let (x, pdf_x) = self.conditional[row].sample_continuous(u[0]);
+        (Vec2::new(x, y), pdf_x * pdf_y)
+    }
+
+    /// Density per unit area of [`Distribution2D::sample`] at `p ∈ [0, 1]²` (0 outside).
+    pub fn pdf(&self, p: Vec2) -> f32 {
+        if !(0.0..=1.0).contains(&p.x) || !(0.0..=1.0).contains(&p.y) {
+            return 0.0;
+        }
+        let row = bin_of(p.y, self.height());
+        self.marginal.pdf_continuous(p.y) * self.conditional[row].pdf_continuous(p.x)
+    }
 }
 
 #[cfg(test)]
@@ -65,5 +188,77 @@ mod tests {
         assert_eq!(d.probability(1), 0.0);
         assert!(Distribution1D::new(&[0.0]).is_none());
         assert!(Distribution1D::new(&[f32::NAN]).is_none());
+    }
+
+    #[test]
+    fn continuous_samples_stay_in_their_bin_and_report_its_density() {
+        let d = Distribution1D::new(&[1.0, 0.0, 3.0, 4.0]).unwrap();
+        for i in 0..=1000 {
+            let u = (i as f32 / 1000.0).min(ONE_MINUS_EPSILON);
+            let (x, pdf) = d.sample_continuous(u);
+            assert!((0.0..1.0).contains(&x), "{x}");
+            assert_eq!(pdf, d.pdf_continuous(x), "u = {u}, x = {x}");
+            assert!(pdf > 0.0, "zero-weight bins are never sampled");
+        }
+        // Piecewise linear: halfway through a bin's share of u lands halfway through the bin.
+        assert!((d.sample_continuous(0.0625).0 - 0.125).abs() < 1e-6);
+        assert!((d.sample_continuous(0.125 + 0.375 * 0.5).0 - 0.625).abs() < 1e-6);
+        assert_eq!(d.pdf_continuous(0.3), 0.0);
+        assert_eq!(d.pdf_continuous(-0.1), 0.0);
+    }
+
+    /// Weights with zero rows and zero cells, 5 columns × 4 rows.
+    const WEIGHTS: [f32; 20] =
+        [1.0, 2.0, 0.0, 4.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 3.0, 0.5, 0.5, 7.0, 2.0, 0.0, 0.0, 9.0, 0.0, 0.0];
+
+    #[test]
+    fn distribution_2d_sampling_matches_the_cell_weights() {
+        let (w, h) = (5, 4);
+        let d = Distribution2D::new(&WEIGHTS, w, h).unwrap();
+        assert_eq!((d.width(), d.height()), (w, h));
+        let total: f32 = WEIGHTS.iter().sum();
+        assert!((d.total() - total).abs() < 1e-5);
+        // Stratified samples: an n × n grid of u. The inverse-CDF map is monotonic in each
+        // coordinate, so the fraction landing in each cell equals its probability to within
+        // the grid resolution (2/n per dimension).
+        let n = 400;
+        let mut counts = [0usize; 20];
+        for i in 0..n {
+            for j in 0..n {
+                let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
+                let (p, pdf) = d.sample(u);
+                assert!((0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y), "{p}");
+                let (cx, cy) = ((p.x * w as f32) as usize, (p.y * h as f32) as usize);
+                counts[cy * w + cx] += 1;
+                // The density per unit area is the cell's probability times the cell count.
+                let expected = WEIGHTS[cy * w + cx] / total * (w * h) as f32;
+                assert!((pdf - expected).abs() < 1e-5 * expected, "{pdf} vs {expected}");
+                assert!((d.pdf(p) - pdf).abs() <= 1e-6 * pdf);
+            }
+        }
+        for (cell, count) in counts.iter().enumerate() {
+            let fraction = *count as f32 / (n * n) as f32;
+            let probability = WEIGHTS[cell] / total;
+            assert!((fraction - probability).abs() < 4.0 / n as f32, "cell {cell}: {fraction} vs {probability}");
+            if WEIGHTS[cell] == 0.0 {
+                assert_eq!(*count, 0, "cell {cell} has no weight");
+            }
+        }
+        // The density integrates to one (it is constant on each cell).
+        let integral: f32 = (0..20)
+            .map(|c| d.pdf(Vec2::new(((c % w) as f32 + 0.5) / w as f32, ((c / w) as f32 + 0.5) / h as f32)))
+            .sum::<f32>()
+            / 20.0;
+        assert!((integral - 1.0).abs() < 1e-5);
+        assert_eq!(d.pdf(Vec2::new(1.5, 0.5)), 0.0);
+    }
+
+    #[test]
+    fn distribution_2d_rejects_bad_weights() {
+        assert!(Distribution2D::new(&WEIGHTS, 4, 4).is_none(), "size mismatch");
+        assert!(Distribution2D::new(&[0.0; 6], 3, 2).is_none(), "all zero");
+        assert!(Distribution2D::new(&[1.0, -1.0], 2, 1).is_none(), "negative");
+        assert!(Distribution2D::new(&[1.0, f32::INFINITY], 1, 2).is_none(), "infinite");
+        assert!(Distribution2D::new(&[], 0, 0).is_none());
     }
 }

@@ -13,7 +13,7 @@ pub mod rng;
 pub mod warp;
 
 pub use bounds::Aabb;
-pub use distribution::Distribution1D;
+pub use distribution::{Distribution1D, Distribution2D};
 pub use frame::Frame;
 pub use glam::{Vec2, Vec3, Vec3A};
 pub use pdf::{PdfA, PdfW};

@@ -8,7 +8,7 @@
 //! An emitter that also reflects (a material with non-zero albedo) keeps scattering after its
 //! emission is collected; the reference scenes' emitters are black and end the path.
 
-use math::{RAY_EPSILON, Ray, Rng};
+use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::{Bsdf, Scene, TransportMode};
 use spectrum::Rgb;
 
@@ -54,7 +54,7 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
         let Some(hit) = scene.intersect(&ray) else {
             // The ray leaves the scene: environment light.
             if let Some(index) = scene.background
-                && let Some(emitted) = scene.lights[index as usize].radiance_on_hit(ray.direction, sphere)
+                && let Some(emitted) = scene.lights[index as usize].radiance_on_hit(ray.direction, Vec3::ZERO, sphere)
             {
                 let weight = if last_specular || !nee {
                     1.0
@@ -69,7 +69,7 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
         // Emitter hit: collect (front side only).
         if let Some(light_index) = hit.light {
             let light = &scene.lights[light_index as usize];
-            if let Some(emitted) = light.radiance_on_hit(ray.direction, sphere) {
+            if let Some(emitted) = light.radiance_on_hit(ray.direction, hit.normal, sphere) {
                 let weight = if last_specular || !nee {
                     1.0
                 } else {

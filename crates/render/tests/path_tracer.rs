@@ -81,7 +81,7 @@ fn emitter_seen_directly_has_exactly_its_radiance() {
         .lights
         .iter()
         .flat_map(|l| match l {
-            Light::Area(a) => a.triangle.vertices().to_vec(),
+            Light::Area(a) => a.triangle().unwrap().vertices().to_vec(),
             _ => vec![],
         })
         .map(|p| scene.camera.raster_position(p).unwrap())

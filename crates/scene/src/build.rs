@@ -3,7 +3,7 @@
 use crate::camera::Camera;
 use crate::desc::{Geometry, LightDesc, MeshData, SceneDescription};
 use crate::filter::Filter;
-use crate::light::{AreaLight, BackgroundLight, DirectionalLight, Light, PointLight};
+use crate::light::{AreaLight, Light};
 use crate::scene::{Primitive, Scene, SurfaceAttributes};
 use crate::shape::{Disk, Shape, Sphere, Triangle};
 
@@ -93,30 +93,26 @@ impl Scene {
                 Geometry::Disk { center, axis_u, axis_v, flip_normals } => {
                     let disk = Disk::new(*center, *axis_u, *axis_v, *flip_normals)
                         .ok_or_else(|| format!("disk '{}' is degenerate", shape.name))?;
-                    if emission.is_some() {
-                        return Err(format!("disk '{}': disc-shaped area lights are not supported yet", shape.name));
-                    }
-                    primitives.push(Primitive::new(Shape::Disk(disk), shape.material, None));
+                    let light = match emission {
+                        Some(radiance) => {
+                            let light = AreaLight::disc(*center, *axis_u, *axis_v, *flip_normals, radiance)
+                                .map_err(|e| format!("disk '{}': {e}", shape.name))?;
+                            lights.push(Light::Area(light));
+                            Some(lights.len() as u32 - 1)
+                        }
+                        None => None,
+                    };
+                    primitives.push(Primitive::new(Shape::Disk(disk), shape.material, light));
                     report.analytic_shapes += 1;
                 }
             }
         }
         let mut environments = 0;
-        for light in &desc.lights {
-            lights.push(match light {
-                LightDesc::Point { position, intensity } => {
-                    Light::Point(PointLight { position: *position, intensity: *intensity })
-                }
-                LightDesc::Directional { direction, irradiance } => {
-                    Light::Directional(DirectionalLight::new(*direction, *irradiance))
-                }
-                LightDesc::Constant { radiance } => {
-                    environments += 1;
-                    Light::Background(BackgroundLight { radiance: *radiance })
-                }
-                LightDesc::Spot { .. } => return Err("spot lights are not supported yet".into()),
-                LightDesc::EnvMap { .. } => return Err("environment maps are not supported yet".into()),
-            });
+        for (index, light) in desc.lights.iter().enumerate() {
+            if matches!(light, LightDesc::Constant { .. } | LightDesc::EnvMap { .. }) {
+                environments += 1;
+            }
+            lights.push(Light::from_desc(light).map_err(|e| format!("light {index}: {e}"))?);
         }
         if environments > 1 {
             return Err(format!("{environments} environment lights; at most one is supported"));

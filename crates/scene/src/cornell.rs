@@ -312,8 +312,8 @@ mod tests {
         for light in &area.lights {
             let Light::Area(a) = light else { panic!("scene 1 has area lights") };
             assert_eq!(a.radiance.r.to_bits(), 0x41c8_4432);
-            assert!((a.triangle.area() - 0.125).abs() < 1e-7);
-            assert_eq!(a.triangle.normal, -Vec3::Z);
+            assert!((a.triangle().unwrap().area() - 0.125).abs() < 1e-7);
+            assert_eq!(a.triangle().unwrap().normal, -Vec3::Z);
         }
 
         let point = build(452, 8, 8).unwrap();

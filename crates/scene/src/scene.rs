@@ -1,7 +1,7 @@
 //! The scene container: primitives with their materials and emitters, the lights, the camera,
 //! the bounding sphere and the BVH, with the two ray queries every integrator uses.
 
-use math::{Aabb, Distribution1D, PI, RAY_EPSILON, Ray, Vec2, Vec3};
+use math::{Aabb, Distribution1D, RAY_EPSILON, Ray, Vec2, Vec3};
 
 use crate::accel::Bvh;
 use crate::camera::Camera;
@@ -112,10 +112,10 @@ impl Scene {
         let bounds: Vec<Aabb> = primitives.iter().map(|p| p.shape.bounds()).collect();
         let scene_box = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
         let (center, radius) = if scene_box.is_empty() { (Vec3::ZERO, 1.0) } else { scene_box.bounding_sphere() };
-        let background = lights.iter().position(|l| matches!(l, Light::Background(_))).map(|i| i as u32);
+        let background = lights.iter().position(Light::is_environment).map(|i| i as u32);
         let bvh = Bvh::build(&bounds);
         let bounding_sphere = BoundingSphere { center, radius };
-        let powers: Vec<f32> = lights.iter().map(|l| light_power(l, &bounding_sphere)).collect();
+        let powers: Vec<f32> = lights.iter().map(|l| l.power(&bounding_sphere)).collect();
         // Lights of zero power are never picked; if every light has zero power (or there are
         // none), nothing is.
         let light_selection = Distribution1D::new(&powers);
@@ -224,18 +224,5 @@ impl Scene {
     /// The material of a hit.
     pub fn material(&self, hit: &SurfaceHit) -> &Material {
         &self.materials[hit.material as usize]
-    }
-}
-
-/// Luminance of the power a light emits (W), for power-proportional light selection. Infinite
-/// lights count the power crossing the bounding sphere's disc, `π R² · π L` for a constant
-/// environment.
-fn light_power(light: &Light, sphere: &BoundingSphere) -> f32 {
-    let disc = PI * sphere.radius * sphere.radius;
-    match light {
-        Light::Area(l) => PI * l.triangle.area() * l.radiance.luminance(),
-        Light::Point(l) => 4.0 * PI * l.intensity.luminance(),
-        Light::Directional(l) => disc * l.irradiance.luminance(),
-        Light::Background(l) => disc * PI * l.radiance.luminance(),
     }
 }

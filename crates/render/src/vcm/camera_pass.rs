@@ -3,7 +3,7 @@
 //! merges with all light vertices in range (s, t ≥ 2), then BSDF sampling with Russian
 //! roulette.
 
-use math::Rng;
+use math::{Rng, Vec3};
 use scene::camera::PrimaryDensity;
 use scene::{Bsdf, Scene, TransportMode};
 use spectrum::Rgb;
@@ -58,7 +58,7 @@ pub fn trace_camera_path(
             // Escaped: the environment light (infinite: no distance update, §5.1).
             if let Some(index) = scene.background
                 && let Some(emitted) =
-                    scene.lights[index as usize].radiance_on_hit(path.ray.direction, &scene.bounding_sphere)
+                    scene.lights[index as usize].radiance_on_hit(path.ray.direction, Vec3::ZERO, &scene.bounding_sphere)
                 && let pick = scene.light_pick_probability(index)
                 && let Some(weight) =
                     emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
@@ -74,7 +74,8 @@ pub fn trace_camera_path(
 
         // Emitter hit (s = 0).
         if let Some(light_index) = hit.light
-            && let Some(emitted) = scene.lights[light_index as usize].radiance_on_hit(direction, &scene.bounding_sphere)
+            && let Some(emitted) =
+                scene.lights[light_index as usize].radiance_on_hit(direction, hit.normal, &scene.bounding_sphere)
             && let pick = scene.light_pick_probability(light_index)
             && let Some(weight) =
                 emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
