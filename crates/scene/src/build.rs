@@ -75,13 +75,19 @@ impl Scene {
                     if !(*radius > 0.0 && radius.is_finite() && center.is_finite()) {
                         return Err(format!("sphere '{}' has radius {radius} at {center}", shape.name));
                     }
-                    if emission.is_some() {
-                        return Err(format!("sphere '{}': spherical area lights are not supported yet", shape.name));
-                    }
+                    let light = match emission {
+                        Some(radiance) => {
+                            let light = AreaLight::sphere(*center, *radius, *flip_normals, radiance)
+                                .map_err(|e| format!("sphere '{}': {e}", shape.name))?;
+                            lights.push(Light::Area(light));
+                            Some(lights.len() as u32 - 1)
+                        }
+                        None => None,
+                    };
                     let mut primitive = Primitive::new(
                         Shape::Sphere(Sphere { center: *center, radius: *radius }),
                         shape.material,
-                        None,
+                        light,
                     );
                     if *flip_normals {
                         primitive.attributes = attributes.len() as u32;
