@@ -300,6 +300,9 @@ fn memory_guard(
         radius_alpha: args.radius_alpha,
         ..render::vcm::VcmSettings::new(algorithm)
     };
+    if memory::upper_bound(scene, &settings) <= limit {
+        return Ok(false);
+    }
     let estimate = memory::estimate(scene, &settings, args.seed);
     if estimate.two_stage_bytes <= limit {
         return Ok(false);

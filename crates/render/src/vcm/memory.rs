@@ -74,6 +74,15 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
     }
 }
 
+/// An upper bound of [`MemoryEstimate::two_stage_bytes`] without a pilot: every light sub-path
+/// stores at most `max_length − 1` vertices. When it fits, the pilot is not needed.
+pub fn upper_bound(scene: &Scene, settings: &VcmSettings) -> u64 {
+    let techniques = Techniques::of(settings.algorithm);
+    let merge = if techniques.merge { std::mem::size_of::<MergeVertex>() + GRID_BYTES_PER_VERTEX } else { 0 };
+    let per_vertex = (2 * std::mem::size_of::<LightVertex>() + merge) as u64;
+    scene.camera.pixel_count() as u64 * u64::from(settings.max_length.saturating_sub(1)) * per_vertex
+}
+
 /// Physical memory of the machine in bytes (Linux: `MemTotal` of `/proc/meminfo`), if known.
 pub fn physical_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -145,6 +154,7 @@ mod tests {
         // 4096 pilot paths = the whole 64×64 image: the same streams, the same count.
         assert_eq!(predicted, actual);
         assert!(e.two_stage_bytes > e.memory_efficient_bytes);
+        assert!(upper_bound(&scene, &settings) >= e.two_stage_bytes);
         assert!(physical_memory().is_none_or(|m| m > 1 << 20));
     }
 }
