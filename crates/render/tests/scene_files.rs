@@ -92,7 +92,8 @@ fn caustic_of_the_glass_sphere_agrees_between_algorithms() {
     let below = scene.camera.raster_position(Vec3::new(0.5, -0.99, -0.2)).expect("the caustic is in view");
     let (bx, by) = ((below.x / 8.0) as usize, (below.y / 8.0) as usize);
     // The caustic's block and its neighbours on the floor.
-    let window: Vec<usize> = [(bx, by), (bx - 1, by), (bx + 1, by), (bx, by - 1)].iter().map(|(x, y)| y * 8 + x).collect();
+    let window: Vec<usize> =
+        [(bx, by), (bx - 1, by), (bx + 1, by), (bx, by - 1)].iter().map(|(x, y)| y * 8 + x).collect();
     let (pt, pt_se) = window_estimate(&scene, "pt", max_length, 400, 1, &window);
     for (algorithm, iterations) in [("bpt", 200), ("vcm", 200)] {
         let (other, other_se) = window_estimate(&scene, algorithm, max_length, iterations, 2, &window);
@@ -157,7 +158,10 @@ fn ggx_conductor_furnace_loses_energy_only_to_single_scattering() {
     for (m, se) in pt.iter().zip(&pt_se) {
         let effective = 1.0 - emission as f64 / m;
         eprintln!("pt furnace radiance {m:.4} ± {se:.4}: effective albedo {effective:.4}");
-        assert!(effective > low - 0.01 && effective < high + 0.01, "effective albedo {effective} outside {low}..{high}");
+        assert!(
+            effective > low - 0.01 && effective < high + 0.01,
+            "effective albedo {effective} outside {low}..{high}"
+        );
     }
     for algorithm in ["bpt", "vcm"] {
         let (other, other_se) = window_estimate(&scene, algorithm, max_length, 64, 2, &all);
