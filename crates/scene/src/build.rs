@@ -31,6 +31,9 @@ impl Scene {
         if width == 0 || height == 0 {
             return Err(format!("the film has no pixels ({width}×{height})"));
         }
+        for (index, material) in desc.materials.iter().enumerate() {
+            material.validate().map_err(|e| format!("material {index}: {e}"))?;
+        }
         let mut report = BuildReport::default();
         let mut primitives = Vec::new();
         let mut attributes = Vec::new();
@@ -156,4 +159,96 @@ fn mesh_triangles(mesh: &MeshData) -> impl Iterator<Item = (Option<Triangle>, Op
         let extra = (normals.is_some() || uvs.is_some()).then_some(SurfaceAttributes::Triangle { normals, uvs });
         (Some(triangle), extra)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::desc::{CameraDesc, FilmDesc, FilterDesc, Projection, ShapeDesc};
+    use crate::material::Material;
+    use crate::texture::Texture;
+    use math::{Vec2, Vec3};
+    use spectrum::Rgb;
+
+    fn description(materials: Vec<Material>, shapes: Vec<ShapeDesc>) -> SceneDescription {
+        SceneDescription {
+            name: "test".into(),
+            camera: CameraDesc {
+                position: Vec3::new(0.0, 0.0, 5.0),
+                forward: -Vec3::Z,
+                up: Vec3::Y,
+                right: Vec3::X,
+                projection: Projection::Perspective { horizontal_fov_degrees: 40.0 },
+            },
+            film: FilmDesc { width: 8, height: 6, filter: FilterDesc::Box },
+            materials,
+            shapes,
+            lights: Vec::new(),
+            max_path_length: Some(5),
+            warnings: Vec::new(),
+        }
+    }
+
+    fn diffuse() -> Material {
+        Material::Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) }
+    }
+
+    #[test]
+    fn meshes_lights_and_attributes() {
+        // A quad whose winding points down (−z) but whose vertex normals point up (+z): it is
+        // turned around, and it emits upwards.
+        let mesh = MeshData {
+            positions: vec![
+                Vec3::new(-1., -1., 0.),
+                Vec3::new(1., -1., 0.),
+                Vec3::new(1., 1., 0.),
+                Vec3::new(-1., 1., 0.),
+            ],
+            normals: vec![Vec3::Z; 4],
+            uvs: vec![Vec2::new(0., 0.), Vec2::new(1., 0.), Vec2::new(1., 1.), Vec2::new(0., 1.)],
+            triangles: vec![[0, 2, 1], [0, 3, 2], [0, 0, 1]],
+        };
+        let shapes = vec![ShapeDesc {
+            name: "quad".into(),
+            geometry: Geometry::Mesh(mesh),
+            material: 0,
+            emission: Some(Rgb::splat(2.0)),
+        }];
+        let (scene, report) = Scene::from_description(&description(vec![diffuse()], shapes), None).unwrap();
+        assert_eq!((report.triangles, report.degenerate_triangles, report.lights), (2, 1, 2));
+        assert_eq!((scene.camera.width, scene.camera.height), (8, 6));
+        let ray = math::Ray::new(Vec3::new(0.3, 0.2, 1.0), -Vec3::Z);
+        let hit = scene.intersect(&ray).unwrap();
+        assert!((hit.normal - Vec3::Z).length() < 1e-6, "turned to the vertex normals: {}", hit.normal);
+        assert!((hit.uv - Vec2::new(0.65, 0.6)).length() < 1e-5, "interpolated uv {}", hit.uv);
+        let light = &scene.lights[hit.light.unwrap() as usize];
+        assert!(light.radiance_on_hit(ray.direction, hit.normal, &scene.bounding_sphere).is_some(), "emits upwards");
+        // Equal areas: equal power, equal selection probability.
+        assert!((scene.light_pick_probability(0) - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn bad_descriptions_are_errors() {
+        let sphere = |radius: f32, material: u32| ShapeDesc {
+            name: "ball".into(),
+            geometry: Geometry::Sphere { center: Vec3::ZERO, radius, flip_normals: false },
+            material,
+            emission: None,
+        };
+        let err = |d: SceneDescription| Scene::from_description(&d, None).err().unwrap();
+        assert!(err(description(vec![diffuse()], vec![sphere(-1.0, 0)])).contains("ball"));
+        assert!(err(description(vec![diffuse()], vec![sphere(1.0, 3)])).contains("material 3"));
+        let blend = |a: Material, b: Material| Material::Blend {
+            weight: Texture::Constant(Rgb::splat(0.5)),
+            first: Box::new(a),
+            second: Box::new(b),
+        };
+        let four = blend(blend(diffuse(), diffuse()), blend(diffuse(), diffuse()));
+        assert!(Scene::from_description(&description(vec![four.clone()], vec![sphere(1.0, 0)]), None).is_ok());
+        let five = blend(four, diffuse());
+        assert!(err(description(vec![five], vec![sphere(1.0, 0)])).contains("at most 4"));
+        let mut no_pixels = description(vec![diffuse()], vec![]);
+        no_pixels.film.width = 0;
+        assert!(err(no_pixels).contains("no pixels"));
+    }
 }

@@ -210,6 +210,33 @@ impl Material {
     }
 }
 
+impl Material {
+    /// Number of leaf materials (blends and two-sided wrappers count what they contain; a
+    /// two-sided material with a distinct back counts both sides).
+    pub fn leaf_count(&self) -> usize {
+        match self {
+            Material::Blend { first, second, .. } => first.leaf_count() + second.leaf_count(),
+            Material::TwoSided { front, back } => front.leaf_count() + back.as_ref().map_or(0, |b| b.leaf_count()),
+            _ => 1,
+        }
+    }
+
+    /// Checks what a BSDF can represent: at most [`MAX_COMPONENTS`] leaves per side.
+    pub fn validate(&self) -> Result<(), String> {
+        let per_side = |m: &Material| m.leaf_count();
+        let largest = match self {
+            Material::TwoSided { front, back } => per_side(front).max(back.as_ref().map_or(0, |b| per_side(b))),
+            m => per_side(m),
+        };
+        if largest > MAX_COMPONENTS {
+            return Err(format!(
+                "a blend of {largest} materials; at most {MAX_COMPONENTS} can be blended (nest fewer blendbsdfs)"
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl From<ReferenceMaterial> for Material {
     fn from(m: ReferenceMaterial) -> Self {
         Material::Reference(m)
@@ -435,8 +462,9 @@ impl Bsdf {
     }
 }
 
-/// Largest number of leaf materials a (nested) [`Material::Blend`] may combine; further leaves
-/// are ignored (their energy is lost). Two levels of blends fit.
+/// Largest number of leaf materials a (nested) [`Material::Blend`] may combine (two levels of
+/// blends fit). [`Material::validate`] rejects more, and scenes are validated when they are
+/// built, so a BSDF never drops a leaf.
 pub const MAX_COMPONENTS: usize = 4;
 
 /// The BSDF of every material but [`Material::Reference`]: a weighted sum of leaf models
