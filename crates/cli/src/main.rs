@@ -536,8 +536,21 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
         None => String::new(),
     };
     let interrupted_note = if result.interrupted { "interrupted: " } else { "" };
+    // Which techniques produced the discarded (NaN/infinite) estimates of this run.
+    let rejected_note = match result.rejected_by_family {
+        Some(counts) if counts.iter().any(|c| *c > 0) => {
+            let parts: Vec<String> = Family::ALL
+                .iter()
+                .zip(counts)
+                .filter(|(_, c)| *c > 0)
+                .map(|(f, c)| format!("{} {c}", f.name()))
+                .collect();
+            format!(" ({})", parts.join(", "))
+        }
+        _ => String::new(),
+    };
     eprintln!(
-        "{interrupted_note}{} with {} at {}x{}: {} iterations{resumed_note} in {:.2} s ({:.1} ms/iteration, {} threads{vertices}), {} rejected samples -> {}",
+        "{interrupted_note}{} with {} at {}x{}: {} iterations{resumed_note} in {:.2} s ({:.1} ms/iteration, {} threads{vertices}), {} rejected samples{rejected_note} -> {}",
         scene.name,
         algorithm.name(),
         film.width(),

@@ -122,6 +122,9 @@ pub struct RenderOutput {
     /// Per technique family ([`Family::ALL`] order), when [`Control::record_families`] was set
     /// and the algorithm is one of the VCM engine's.
     pub family_films: Option<[Film; 5]>,
+    /// Discarded non-finite estimates of this render's iterations per technique family
+    /// ([`Family::ALL`] order; VCM engine only).
+    pub rejected_by_family: Option<crate::vcm::RejectedCounts>,
 }
 
 /// The integrator of a render, with its state across iterations.
@@ -282,6 +285,7 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
     let start = Instant::now();
     let mut last_checkpoint = Instant::now();
     let mut interrupted = false;
+    let mut rejected_by_family: Option<crate::vcm::RejectedCounts> = None;
     let first_iteration = renderer.iterations();
     loop {
         let iteration = renderer.iterations();
@@ -296,6 +300,12 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
         }
         let rejected = renderer.step();
         film.add_iteration(renderer.frame(), rejected);
+        if let Some(engine) = renderer.vcm_engine() {
+            let counts = rejected_by_family.get_or_insert_with(Default::default);
+            for (total, r) in counts.iter_mut().zip(engine.stats().rejected_by_family) {
+                *total += r;
+            }
+        }
         if let (Some(films), Some(values)) = (&mut family_films, renderer.vcm_engine().and_then(|e| e.family_frames()))
         {
             for (index, family_film) in films.iter_mut().enumerate() {
@@ -337,6 +347,7 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
         vcm_stats,
         interrupted,
         family_films,
+        rejected_by_family,
     })
 }
 

@@ -128,15 +128,41 @@ impl Family {
     }
 }
 
-/// Contributions of one camera sub-path, by family.
+/// Contributions of one camera sub-path, by family (`.0`), and the number of non-finite (NaN or
+/// infinite) estimates each family produced and that were discarded (`.1`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct FamilyValues(pub [Rgb; 5]);
+pub struct FamilyValues(pub [Rgb; 5], pub [u32; 5]);
+
+/// Discarded non-finite estimates per family ([`Family`] order).
+pub type RejectedCounts = [u64; 5];
 
 impl FamilyValues {
-    /// Adds `value` to `family`.
+    /// Adds `value` to `family`; a NaN or infinite value is counted for the family instead and
+    /// never reaches the image.
     #[inline]
     pub fn add(&mut self, family: Family, value: Rgb) {
-        self.0[family as usize] += value;
+        if value.is_finite() {
+            self.0[family as usize] += value;
+        } else {
+            self.1[family as usize] += 1;
+        }
+    }
+
+    /// Zeroes the values when their sum is not finite (finite values that overflow together),
+    /// counting the estimate against the family with the largest value.
+    fn discard_overflow(&mut self) {
+        if !self.total().is_finite() {
+            let largest = (0..5).max_by(|a, b| self.0[*a].max_component().total_cmp(&self.0[*b].max_component()));
+            self.0 = [Rgb::BLACK; 5];
+            self.1[largest.unwrap_or(0)] += 1;
+        }
+    }
+
+    /// Adds this estimate's discarded counts to `counts`.
+    fn count_rejected(&self, counts: &mut RejectedCounts) {
+        for (c, r) in counts.iter_mut().zip(self.1) {
+            *c += u64::from(r);
+        }
     }
 
     /// The sum over families.
@@ -245,6 +271,8 @@ pub struct IterationStats {
     pub splats: usize,
     /// Non-finite contributions discarded.
     pub rejected: u64,
+    /// The same, per technique family ([`Family`] order).
+    pub rejected_by_family: RejectedCounts,
     /// Global merging radius used.
     pub radius: f32,
     /// Wall-clock time of the phases (two-stage mode only).
@@ -295,7 +323,7 @@ type LightChunk = (Vec<LightVertex>, Vec<u32>, Vec<Splat>);
 
 /// One image row of the single-stage mode: light vertices, splats, per-pixel family values and
 /// rejected estimates.
-type RowResult = (Vec<LightVertex>, Vec<Splat>, Vec<FamilyValues>, u64);
+type RowResult = (Vec<LightVertex>, Vec<Splat>, Vec<FamilyValues>, RejectedCounts);
 
 impl VcmEngine {
     /// An engine for `scene`.
@@ -374,9 +402,10 @@ impl VcmEngine {
         };
         self.pixel_radii = pixel_radii;
         self.stats.splats = splats;
-        self.stats.rejected = rejected;
+        self.stats.rejected = rejected.iter().sum();
+        self.stats.rejected_by_family = rejected;
         self.stats.radius = radius;
-        rejected
+        self.stats.rejected
     }
 
     /// The two-stage iteration (§2.3): all light sub-paths, the grid, then all camera paths.
@@ -387,7 +416,7 @@ impl VcmEngine {
         iteration: u64,
         it: &Iteration,
         frame: &mut FrameBuffer,
-    ) -> (u64, usize) {
+    ) -> (RejectedCounts, usize) {
         let pixel_count = frame.pixels.len();
         let start = std::time::Instant::now();
         let chunks = trace_light_chunks(scene, seed, iteration, it, pixel_count);
@@ -438,7 +467,7 @@ impl VcmEngine {
         iteration: u64,
         it: &Iteration,
         frame: &mut FrameBuffer,
-    ) -> (u64, usize) {
+    ) -> (RejectedCounts, usize) {
         let pixel_count = frame.pixels.len();
         if it.techniques.merge && !self.merge_seeded {
             // Merging uses the previous iteration's light vertices. The first iteration of a
@@ -468,7 +497,7 @@ impl VcmEngine {
                 let mut vertices = Vec::new();
                 let mut splats = Vec::new();
                 let mut families = Vec::new();
-                let mut rejected = 0;
+                let mut rejected = RejectedCounts::default();
                 for (column, pixel) in pixels.iter_mut().enumerate() {
                     let index = row * width + column;
                     let start = vertices.len();
@@ -485,17 +514,15 @@ impl VcmEngine {
                         light_path,
                         merge_source.as_ref(),
                     );
-                    if !values.total().is_finite() {
-                        values = FamilyValues::default();
-                        rejected += 1;
-                    }
+                    values.discard_overflow();
+                    values.count_rejected(&mut rejected);
                     *pixel = values.total();
                     families.push(values);
                 }
                 (vertices, splats, families, rejected)
             })
             .collect();
-        let mut rejected = 0;
+        let mut rejected = RejectedCounts::default();
         if let Some(frames) = family_frames {
             frames.clear();
             for (_, _, families, _) in &rows {
@@ -505,7 +532,9 @@ impl VcmEngine {
         self.store.clear();
         for (vertices, _, _, row_rejected) in &rows {
             self.store.vertices.extend_from_slice(vertices);
-            rejected += row_rejected;
+            for (total, r) in rejected.iter_mut().zip(row_rejected) {
+                *total += r;
+            }
         }
         let splats = rows.iter().map(|r| r.1.len()).sum();
         apply_splats(
@@ -568,31 +597,29 @@ fn render_pixels(
     frame: &mut FrameBuffer,
     family_frames: Option<&mut Vec<FamilyValues>>,
     trace: impl Fn(usize) -> FamilyValues + Sync,
-) -> u64 {
+) -> RejectedCounts {
     let width = frame.width as usize;
     let pixel_count = frame.pixels.len();
-    let evaluate = |index: usize, rejected: &mut u64| {
-        let values = trace(index);
-        if values.total().is_finite() {
-            values
-        } else {
-            *rejected += 1;
-            FamilyValues::default()
-        }
+    let evaluate = |index: usize, rejected: &mut RejectedCounts| {
+        let mut values = trace(index);
+        values.discard_overflow();
+        values.count_rejected(rejected);
+        values
     };
+    let sum = |a: RejectedCounts, b: RejectedCounts| std::array::from_fn(|i| a[i] + b[i]);
     match family_frames {
         None => frame
             .pixels
             .par_chunks_mut(width)
             .enumerate()
             .map(|(row, pixels)| {
-                let mut rejected = 0;
+                let mut rejected = RejectedCounts::default();
                 for (column, pixel) in pixels.iter_mut().enumerate() {
                     *pixel = evaluate(row * width + column, &mut rejected).total();
                 }
                 rejected
             })
-            .sum(),
+            .reduce(RejectedCounts::default, sum),
         Some(families) => {
             families.clear();
             families.resize(pixel_count, FamilyValues::default());
@@ -602,14 +629,14 @@ fn render_pixels(
                 .zip(families.par_chunks_mut(width))
                 .enumerate()
                 .map(|(row, (pixels, family_row))| {
-                    let mut rejected = 0;
+                    let mut rejected = RejectedCounts::default();
                     for (column, (pixel, family)) in pixels.iter_mut().zip(family_row).enumerate() {
                         *family = evaluate(row * width + column, &mut rejected);
                         *pixel = family.total();
                     }
                     rejected
                 })
-                .sum()
+                .reduce(RejectedCounts::default, sum)
         }
     }
 }
@@ -622,7 +649,7 @@ fn apply_splats<'s>(
     camera: &scene::Camera,
     mut family_frames: Option<&mut Vec<FamilyValues>>,
     splats: impl Iterator<Item = &'s [Splat]>,
-    rejected: &mut u64,
+    rejected: &mut RejectedCounts,
 ) {
     let mut add = |pixel: u32, value: Rgb| {
         frame.pixels[pixel as usize] += value;
@@ -634,7 +661,7 @@ fn apply_splats<'s>(
         let value = if splat.value.is_finite() {
             splat.value
         } else {
-            *rejected += 1;
+            rejected[Family::LightTracing as usize] += 1;
             Rgb::BLACK
         };
         match splat.target {
@@ -667,4 +694,30 @@ fn pixel_footprints(scene: &Scene, fallback: f32) -> Vec<f32> {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_finite_estimates_are_counted_per_family_and_never_added() {
+        let mut values = FamilyValues::default();
+        values.add(Family::NextEvent, Rgb::splat(1.0));
+        values.add(Family::NextEvent, Rgb::new(f32::NAN, 0.0, 0.0));
+        values.add(Family::Merging, Rgb::splat(f32::INFINITY));
+        values.add(Family::Merging, Rgb::splat(2.0));
+        assert_eq!(values.total(), Rgb::splat(3.0));
+        assert_eq!(values.1, [0, 1, 0, 0, 1]);
+        // Finite values whose sum overflows: dropped, counted against the largest.
+        let mut overflow = FamilyValues::default();
+        overflow.add(Family::Connection, Rgb::splat(f32::MAX));
+        overflow.add(Family::EmitterHit, Rgb::splat(f32::MAX * 0.5));
+        overflow.discard_overflow();
+        assert_eq!(overflow.total(), Rgb::BLACK);
+        let mut counts = RejectedCounts::default();
+        values.count_rejected(&mut counts);
+        overflow.count_rejected(&mut counts);
+        assert_eq!(counts, [0, 1, 0, 1, 1]);
+    }
 }
