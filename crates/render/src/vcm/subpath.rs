@@ -19,7 +19,9 @@ pub struct SubPath {
     pub path_length: u32,
     /// MIS quantities for the vertex about to be found (partial until [`SubPathMis::arrive`]).
     pub mis: SubPathMis,
-    /// False for light sub-paths from infinite lights until their first vertex (§5.1).
+    /// False for light sub-paths from infinite lights, and for camera sub-paths of the
+    /// orthographic camera, until their first vertex: the start density is already per unit
+    /// area, so the first segment gets no distance factor (§5.1).
     pub is_finite_light: bool,
     /// True while every scattering event so far was specular.
     pub specular_path: bool,
