@@ -37,6 +37,8 @@ pub struct Recorded {
     pub radius_mode: String,
     /// Memory-efficient mode.
     pub memory_efficient: bool,
+    /// Spectral mode (absent in checkpoints written before it existed: RGB).
+    pub spectral: bool,
 }
 
 const MAGIC: &str = "vcm-checkpoint 2";
@@ -63,6 +65,7 @@ pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
         writeln!(out, "radius_alpha={}", r.radius_alpha)?;
         writeln!(out, "radius_mode={}", r.radius_mode)?;
         writeln!(out, "memory_efficient={}", r.memory_efficient)?;
+        writeln!(out, "spectral={}", r.spectral)?;
         writeln!(out, "iterations={}", film.iterations())?;
         writeln!(out, "rejected={}", film.rejected_samples())?;
         writeln!(out)?;
@@ -119,6 +122,10 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
         radius_alpha: field(&fields, "radius_alpha").ok_or_else(|| missing("radius_alpha"))?,
         radius_mode: field(&fields, "radius_mode").ok_or_else(|| missing("radius_mode"))?,
         memory_efficient: field(&fields, "memory_efficient").ok_or_else(|| missing("memory_efficient"))?,
+        spectral: match fields.get("spectral") {
+            None => false,
+            Some(_) => field(&fields, "spectral").ok_or_else(|| missing("spectral"))?,
+        },
     };
     let iterations: u64 = field(&fields, "iterations").ok_or_else(|| missing("iterations"))?;
     let rejected: u64 = field(&fields, "rejected").ok_or_else(|| missing("rejected"))?;
@@ -159,6 +166,7 @@ mod tests {
             radius_alpha: 0.75,
             radius_mode: "per-pixel".into(),
             memory_efficient: true,
+            spectral: true,
         };
         let sums: Vec<[f64; 3]> = (0..6).map(|i| [i as f64 * 0.1, 1.0 / 3.0, f64::MIN_POSITIVE]).collect();
         let squares: Vec<[f64; 3]> = (0..6).map(|i| [i as f64, 0.5, 1e300]).collect();

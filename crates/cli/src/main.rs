@@ -120,6 +120,10 @@ struct RenderArgs {
     /// iteration's light vertices, keeping only their 64-byte merging data.
     #[arg(long)]
     memory_efficient: bool,
+    /// Spectral rendering: four hero-rotated wavelengths per path (360-830 nm), RGB colours
+    /// upsampled to spectra, dispersion; the image is still written in linear sRGB.
+    #[arg(long)]
+    spectral: bool,
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N", default_value_t = 0)]
     threads: usize,
@@ -284,26 +288,15 @@ fn build_scene(mask: u32, (width, height): (u32, u32)) -> Result<Scene> {
 /// Checks the estimated memory of the VCM engine's buffers against `--max-memory` (default:
 /// half of the physical memory). Returns whether to switch to the memory-efficient mode; fails
 /// when even that does not fit.
-fn memory_guard(
-    scene: &Scene,
-    algorithm: render::vcm::VcmAlgorithm,
-    max_length: u32,
-    args: &RenderArgs,
-) -> Result<bool> {
+fn memory_guard(scene: &Scene, settings: &render::vcm::VcmSettings, args: &RenderArgs) -> Result<bool> {
     use render::vcm::memory::{self, format_size};
     let Some(limit) = args.max_memory.or_else(|| memory::physical_memory().map(|m| m / 2)) else {
         return Ok(false);
     };
-    let settings = render::vcm::VcmSettings {
-        max_length,
-        radius_factor: args.radius_factor,
-        radius_alpha: args.radius_alpha,
-        ..render::vcm::VcmSettings::new(algorithm)
-    };
-    if memory::upper_bound(scene, &settings) <= limit {
+    if memory::upper_bound(scene, settings) <= limit {
         return Ok(false);
     }
-    let estimate = memory::estimate(scene, &settings, args.seed);
+    let estimate = memory::estimate(scene, settings, args.seed);
     if estimate.two_stage_bytes <= limit {
         return Ok(false);
     }
@@ -380,6 +373,7 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
                 anyhow::anyhow!("unknown radius mode '{}' in '{}'", recorded.radius_mode, path.display())
             })?;
             args.memory_efficient = recorded.memory_efficient;
+            args.spectral = recorded.spectral;
             if args.checkpoint.is_none() {
                 args.checkpoint = Some(path.clone());
             }
@@ -440,12 +434,7 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
     let LoadedScene { scene, file_max_length } = load_scene(&source, args.resolution, args.quiet)?;
     let max_length = args.max_length.or(file_max_length).unwrap_or(10);
     let resolution = (scene.camera.width, scene.camera.height);
-    if let Algorithm::Vcm(vcm_algorithm) = algorithm
-        && !args.memory_efficient
-    {
-        args.memory_efficient = memory_guard(&scene, vcm_algorithm, max_length, &args)?;
-    }
-    let settings = RenderSettings {
+    let mut settings = RenderSettings {
         algorithm,
         budget,
         max_length,
@@ -459,7 +448,14 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
             RadiusModeName::PerPixel => RadiusMode::PerPixel,
         },
         memory_efficient: args.memory_efficient,
+        spectral: args.spectral,
     };
+    if let Some(vcm_settings) = settings.vcm_settings()
+        && !settings.memory_efficient
+    {
+        settings.memory_efficient = memory_guard(&scene, &vcm_settings, &args)?;
+        args.memory_efficient = settings.memory_efficient;
+    }
     let recorded = checkpoint::Recorded {
         mask: match source {
             SceneSource::Builtin(mask) => mask,
@@ -477,6 +473,7 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
         radius_alpha: args.radius_alpha,
         radius_mode: args.radius_mode.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default(),
         memory_efficient: args.memory_efficient,
+        spectral: args.spectral,
     };
     // First Ctrl-C / SIGTERM: stop after the current iteration; a second one: exit at once.
     let handler = ctrlc::set_handler(|| {

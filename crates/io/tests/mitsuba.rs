@@ -465,7 +465,7 @@ fn conductors() {
 #[test]
 fn dielectrics_and_named_iors() {
     match one_material(r#"<bsdf type="dielectric"/>"#).0 {
-        Material::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance } => {
+        Material::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance, .. } => {
             assert_eq!((int_ior, ext_ior), (1.5046, 1.000277));
             assert_eq!(specular_reflectance, Texture::Constant(Rgb::WHITE));
             assert_eq!(specular_transmittance, Texture::Constant(Rgb::WHITE));

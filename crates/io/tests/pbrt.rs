@@ -464,7 +464,8 @@ fn dielectrics_mix_and_unsupported_materials() {
             int_ior: 1.33,
             ext_ior: 1.0,
             specular_reflectance: white.clone(),
-            specular_transmittance: white.clone()
+            specular_transmittance: white.clone(),
+            dispersion: None
         }
     );
     match m(1) {

@@ -85,6 +85,9 @@ pub struct RenderSettings {
     pub radius_mode: RadiusMode,
     /// Memory-efficient progressive mode of the VCM engine (tech report §6.2).
     pub memory_efficient: bool,
+    /// Spectral mode: hero wavelength sampling with four wavelengths per path
+    /// ([`spectrum::Hero4`]); RGB otherwise.
+    pub spectral: bool,
 }
 
 impl Default for RenderSettings {
@@ -100,6 +103,25 @@ impl Default for RenderSettings {
             radius_alpha: 0.75,
             radius_mode: RadiusMode::Global,
             memory_efficient: false,
+            spectral: false,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// The VCM engine's settings, when the algorithm is one of its.
+    pub fn vcm_settings(&self) -> Option<VcmSettings> {
+        match self.algorithm {
+            Algorithm::Vcm(algorithm) => Some(VcmSettings {
+                algorithm,
+                max_length: self.max_length,
+                radius_factor: self.radius_factor,
+                radius_alpha: self.radius_alpha,
+                radius_mode: self.radius_mode,
+                memory_efficient: self.memory_efficient,
+                spectral: self.spectral,
+            }),
+            _ => None,
         }
     }
 }
@@ -157,20 +179,24 @@ impl<'a> Renderer<'a> {
             .num_threads(settings.threads)
             .build()
             .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
-        let integrator = match settings.algorithm {
-            Algorithm::PathTracing => Integrator::PathTracing(PathTracer::new(settings.max_length)),
-            Algorithm::EyeLight => Integrator::EyeLight,
-            Algorithm::Vcm(algorithm) => Integrator::Vcm(Box::new(VcmEngine::new(
-                scene,
-                VcmSettings {
-                    algorithm,
-                    max_length: settings.max_length,
-                    radius_factor: settings.radius_factor,
-                    radius_alpha: settings.radius_alpha,
-                    radius_mode: settings.radius_mode,
-                    memory_efficient: settings.memory_efficient,
-                },
-            ))),
+        if let Algorithm::Vcm(algorithm) = settings.algorithm
+            && settings.spectral
+            && settings.memory_efficient
+            && crate::vcm::Techniques::of(algorithm).merge
+        {
+            return Err(format!(
+                "spectral mode cannot use the memory-efficient mode with {}: its merges pair the light vertices \
+                 of one iteration with the camera paths of the next, which are traced at other wavelengths",
+                settings.algorithm.name()
+            ));
+        }
+        let integrator = match (settings.algorithm, settings.vcm_settings()) {
+            (_, Some(vcm)) => Integrator::Vcm(Box::new(VcmEngine::new(scene, vcm))),
+            (Algorithm::EyeLight, _) => Integrator::EyeLight,
+            _ => Integrator::PathTracing(PathTracer {
+                spectral: settings.spectral,
+                ..PathTracer::new(settings.max_length)
+            }),
         };
         let frame = FrameBuffer::new(scene.camera.width, scene.camera.height);
         Ok(Self { scene, settings: settings.clone(), pool, integrator, frame, iteration: first_iteration })

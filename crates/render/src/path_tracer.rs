@@ -10,7 +10,7 @@
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::{Bsdf, Scene, TransportMode};
-use spectrum::Rgb;
+use spectrum::{Hero4, Rgb, SpectralMode};
 
 use crate::balance_heuristic;
 
@@ -23,25 +23,43 @@ pub struct PathTracer {
     /// found only by BSDF sampling, an independent estimator used to test the MIS weights;
     /// delta lights then contribute nothing.
     pub next_event_estimation: bool,
+    /// Spectral mode ([`Hero4`]): each camera path draws its own four wavelengths (the first
+    /// number of its stream); otherwise RGB.
+    pub spectral: bool,
 }
 
 impl PathTracer {
     /// The path tracer with next-event estimation.
     pub fn new(max_length: u32) -> Self {
-        Self { max_length, next_event_estimation: true }
+        Self { max_length, next_event_estimation: true, spectral: false }
     }
 
-    /// Radiance arriving at the camera along `camera_ray`.
+    /// Radiance arriving at the camera along `camera_ray`, as linear sRGB.
     pub fn radiance(&self, scene: &Scene, camera_ray: Ray, rng: &mut Rng) -> Rgb {
-        radiance(scene, camera_ray, rng, self.max_length, self.next_event_estimation)
+        if self.spectral {
+            let wavelengths = Hero4::sample_wavelengths(rng.uniform());
+            radiance::<Hero4>(scene, camera_ray, rng, self.max_length, self.next_event_estimation, &wavelengths)
+                .to_rgb(&wavelengths)
+        } else {
+            radiance::<Rgb>(scene, camera_ray, rng, self.max_length, self.next_event_estimation, &())
+        }
     }
 }
 
-fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee: bool) -> Rgb {
+fn radiance<S: SpectralMode>(
+    scene: &Scene,
+    camera_ray: Ray,
+    rng: &mut Rng,
+    max_length: u32,
+    nee: bool,
+    w: &S::Wavelengths,
+) -> S {
     let sphere = &scene.bounding_sphere;
+    let hero = S::hero_wavelength(w);
     let mut ray = camera_ray;
-    let mut throughput = Rgb::WHITE;
-    let mut result = Rgb::BLACK;
+    let mut throughput = S::splat(1.0);
+    let mut terminated = false;
+    let mut result = S::default();
     let mut path_length = 1u32;
     // Solid-angle pdf of the last BSDF sample (Russian roulette included), and whether it
     // was specular (then no other technique could have produced the next vertex).
@@ -61,7 +79,7 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
                 } else {
                     balance_heuristic(last_pdf, emitted.direct_pdf.0 * scene.light_pick_probability(index))
                 };
-                result += throughput * emitted.radiance * weight;
+                result += throughput * scene.emission::<S>(index, w, emitted.radiance) * weight;
             }
             break;
         };
@@ -77,14 +95,15 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
                     let direct_pdf = emitted.direct_pdf.to_solid_angle(distance * distance, emitted.cos_at_light);
                     balance_heuristic(last_pdf, direct_pdf.0 * scene.light_pick_probability(light_index))
                 };
-                result += throughput * emitted.radiance * weight;
+                result += throughput * scene.emission::<S>(light_index, w, emitted.radiance) * weight;
             }
         }
         if path_length >= max_length {
             break;
         }
 
-        let Some(bsdf) = Bsdf::new(scene.material(&hit), &hit.shading_point(), -ray.direction, TransportMode::Radiance)
+        let Some(bsdf) =
+            Bsdf::new_at(scene.material(&hit), &hit.shading_point(), -ray.direction, TransportMode::Radiance, hero)
         else {
             break;
         };
@@ -93,7 +112,7 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
         // Next-event estimation (a path one segment longer).
         if nee
             && !bsdf.is_delta()
-            && let Some((_, light, pick)) = scene.pick_light(rng.uniform())
+            && let Some((index, light, pick)) = scene.pick_light(rng.uniform())
         {
             let u = rng.uniform2();
             if let Some(direct) = light.sample_direct(hit.position, u, sphere)
@@ -106,7 +125,10 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
                 } else {
                     balance_heuristic(light_pdf, eval.pdf.forward.0 * continuation)
                 };
-                result += throughput * direct.radiance * eval.value * (eval.cos_generated * weight / light_pdf);
+                result += throughput
+                    * scene.emission::<S>(index, w, direct.radiance)
+                    * S::from_reflectance(w, eval.value)
+                    * (eval.cos_generated * weight / light_pdf);
             }
         }
 
@@ -116,7 +138,11 @@ fn radiance(scene: &Scene, camera_ray: Ray, rng: &mut Rng, max_length: u32, nee:
             break;
         }
         let pdf = sample.pdf.forward.0 * continuation;
-        throughput *= sample.value * (sample.cos_generated / pdf);
+        throughput *= S::from_reflectance(w, sample.value) * (sample.cos_generated / pdf);
+        if sample.dispersive && !terminated {
+            throughput = throughput.terminate_secondary();
+            terminated = true;
+        }
         last_pdf = pdf;
         last_specular = sample.lobe.is_specular();
         ray = Ray::new(hit.position + RAY_EPSILON * sample.direction, sample.direction);

@@ -33,7 +33,7 @@ fn furnace_gives_the_geometric_series() {
         let scene = common::furnace(emission, albedo, 16);
         let expected: f64 = (0..max_length).map(|k| emission as f64 * (albedo as f64).powi(k as i32)).sum();
         for next_event_estimation in [true, false] {
-            let tracer = PathTracer { max_length, next_event_estimation };
+            let tracer = PathTracer { max_length, next_event_estimation, spectral: false };
             let stats = estimate(&scene, tracer, 40_000, 17);
             let se = stats.std_error();
             let z = (stats.mean() - expected) / se.max(1e-12);
@@ -141,8 +141,13 @@ fn next_event_estimation_and_bsdf_sampling_alone_agree() {
     for mask in [273, 456] {
         let scene = cornell::build(mask, 32, 32).unwrap();
         let (a_mean, a_se) = block_statistics(&scene, PathTracer::new(10), 64, 8, 1);
-        let (b_mean, b_se) =
-            block_statistics(&scene, PathTracer { max_length: 10, next_event_estimation: false }, 256, 8, 2);
+        let (b_mean, b_se) = block_statistics(
+            &scene,
+            PathTracer { max_length: 10, next_event_estimation: false, spectral: false },
+            256,
+            8,
+            2,
+        );
         let outcome = z_test_entries(&a_mean, &a_se, &b_mean, &b_se, 1e-3);
         assert!(outcome.passed, "mask {mask}: {outcome}");
         // The test has power: the means are far from zero.

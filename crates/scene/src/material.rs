@@ -45,6 +45,7 @@ use math::{COSINE_EPSILON, Frame, INV_PI, PdfW, Vec2, Vec3, sqr, warp};
 use crate::microfacet::{Ggx, fresnel_conductor_rgb, fresnel_diffuse_reflectance, refract};
 use crate::texture::Texture;
 use spectrum::Rgb;
+use spectrum::ior::Ior;
 
 /// Below this cosine between the generated direction and the mirrored fixed direction, the
 /// Phong lobe is zero.
@@ -120,7 +121,7 @@ pub enum Material {
     },
     /// Smooth dielectric interface (Fresnel reflection + refraction).
     Dielectric {
-        /// IOR inside.
+        /// IOR inside (in RGB mode, and in spectral mode without `dispersion`).
         int_ior: f32,
         /// IOR outside.
         ext_ior: f32,
@@ -128,6 +129,9 @@ pub enum Material {
         specular_reflectance: Texture,
         /// Factor on transmission.
         specular_transmittance: Texture,
+        /// Wavelength-dependent IOR inside, used in spectral mode instead of `int_ior` (at the
+        /// hero wavelength; the path then continues at the hero wavelength only).
+        dispersion: Option<Ior>,
     },
     /// Thin dielectric sheet: reflection and straight-through transmission with the
     /// inter-reflections of a thin slab summed analytically.
@@ -329,6 +333,9 @@ pub struct BsdfSample {
     pub pdf: PdfPair,
     /// The lobe that was sampled.
     pub lobe: LobeKind,
+    /// A delta lobe of a dispersive dielectric at the hero wavelength: the other wavelengths
+    /// cannot take this direction, so the path continues at the hero wavelength only.
+    pub dispersive: bool,
 }
 
 /// A BSDF at one hit, for one fixed direction and transport mode.
@@ -360,17 +367,37 @@ impl Bsdf {
     /// vertex even for the small reference variant (measured: ~5 % of a BPT iteration).
     #[inline]
     pub fn new(material: &Material, point: &ShadingPoint, fixed: Vec3, mode: TransportMode) -> Option<Bsdf> {
+        Self::new_at(material, point, fixed, mode, None)
+    }
+
+    /// [`Bsdf::new`] for a path traced at the hero wavelength `hero` (nm; `None` in RGB mode):
+    /// dispersive dielectrics take their index at that wavelength, and their samples are marked
+    /// [`BsdfSample::dispersive`].
+    #[inline]
+    pub fn new_at(
+        material: &Material,
+        point: &ShadingPoint,
+        fixed: Vec3,
+        mode: TransportMode,
+        hero: Option<f32>,
+    ) -> Option<Bsdf> {
         match material {
             Material::Reference(m) => {
                 Some(Bsdf { inner: Inner::Reference(ReferenceBsdf::new(m, point.geometric_normal, fixed, mode)?) })
             }
-            _ => Self::new_model(material, point, fixed, mode),
+            _ => Self::new_model(material, point, fixed, mode, hero),
         }
     }
 
     #[inline(never)]
-    fn new_model(material: &Material, point: &ShadingPoint, fixed: Vec3, mode: TransportMode) -> Option<Bsdf> {
-        Some(Bsdf { inner: Inner::Model(ModelBsdf::new(material, point, fixed, mode)?) })
+    fn new_model(
+        material: &Material,
+        point: &ShadingPoint,
+        fixed: Vec3,
+        mode: TransportMode,
+        hero: Option<f32>,
+    ) -> Option<Bsdf> {
+        Some(Bsdf { inner: Inner::Model(ModelBsdf::new(material, point, fixed, mode, hero)?) })
     }
 
     /// Probability of continuing a path through this vertex (Russian roulette): the largest
@@ -535,8 +562,9 @@ enum Model {
     Conductor { eta: Rgb, k: Rgb, specular: Rgb },
     /// GGX microfacet conductor.
     RoughConductor { ggx: Ggx, eta: Rgb, k: Rgb, specular: Rgb },
-    /// Smooth dielectric; `eta` = inside over outside.
-    Dielectric { eta: f32, reflectance: Rgb, transmittance: Rgb },
+    /// Smooth dielectric; `eta` = inside over outside (at the hero wavelength when
+    /// `dispersive`).
+    Dielectric { eta: f32, reflectance: Rgb, transmittance: Rgb, dispersive: bool },
     /// Thin sheet; `eta` = sheet over surroundings.
     ThinDielectric { eta: f32, reflectance: Rgb, transmittance: Rgb },
     /// GGX microfacet dielectric; `eta` = inside over outside.
@@ -651,7 +679,7 @@ fn thin_reflectance(cos: f32, eta: f32) -> f32 {
 
 impl Model {
     /// The leaf model of a non-blend, non-two-sided material with its textures at `uv`.
-    fn from_leaf(material: &Material, uv: Vec2) -> Option<Model> {
+    fn from_leaf(material: &Material, uv: Vec2, hero: Option<f32>) -> Option<Model> {
         let model = match material {
             Material::Reference(_) | Material::Blend { .. } | Material::TwoSided { .. } => return None,
             Material::Diffuse { reflectance } => Model::Diffuse { reflectance: reflectance.eval(uv) },
@@ -664,11 +692,16 @@ impl Model {
                 k: *k,
                 specular: specular_reflectance.eval(uv),
             },
-            Material::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance } => {
+            Material::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance, dispersion } => {
+                let (int_ior, dispersive) = match (dispersion, hero) {
+                    (Some(ior), Some(lambda)) => (ior.eval(lambda), true),
+                    _ => (*int_ior, false),
+                };
                 Model::Dielectric {
-                    eta: relative_ior(*int_ior, *ext_ior),
+                    eta: relative_ior(int_ior, *ext_ior),
                     reflectance: specular_reflectance.eval(uv),
                     transmittance: specular_transmittance.eval(uv),
+                    dispersive,
                 }
             }
             Material::ThinDielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance } => {
@@ -779,7 +812,7 @@ impl Model {
             Model::Conductor { eta, k, specular } | Model::RoughConductor { eta, k, specular, .. } => {
                 fresnel_conductor_rgb(w.z, *eta, *k) * *specular
             }
-            Model::Dielectric { eta, reflectance, transmittance }
+            Model::Dielectric { eta, reflectance, transmittance, .. }
             | Model::RoughDielectric { eta, reflectance, transmittance, .. } => {
                 let f = fresnel_dielectric(w.z, *eta);
                 *reflectance * f + *transmittance * (1.0 - f)
@@ -887,7 +920,7 @@ impl Model {
             Model::Diffuse { .. } => cosine(),
             Model::Conductor { eta, k, specular } => mirror(fresnel_conductor_rgb(fixed.z, *eta, *k) * *specular),
             Model::RoughConductor { ggx, .. } => glossy(ggx),
-            Model::Dielectric { eta, reflectance, transmittance } => {
+            Model::Dielectric { eta, reflectance, transmittance, .. } => {
                 let f = fresnel_dielectric(fixed.z, *eta);
                 if lobe == 0 {
                     mirror(*reflectance * f)
@@ -1050,7 +1083,13 @@ impl RoughPair {
 }
 
 impl ModelBsdf {
-    fn new(material: &Material, point: &ShadingPoint, fixed: Vec3, mode: TransportMode) -> Option<ModelBsdf> {
+    fn new(
+        material: &Material,
+        point: &ShadingPoint,
+        fixed: Vec3,
+        mode: TransportMode,
+        hero: Option<f32>,
+    ) -> Option<ModelBsdf> {
         let geometric = point.geometric_normal;
         // The shading normal on the side of the geometric normal (a degenerate one is replaced
         // by the geometric normal).
@@ -1089,7 +1128,7 @@ impl ModelBsdf {
             count: 0,
             components: [empty; MAX_COMPONENTS],
         };
-        bsdf.add(material, point.uv, 1.0, 1.0);
+        bsdf.add(material, point.uv, 1.0, 1.0, hero);
 
         let mut total_weight = 0.0;
         let mut albedo = Rgb::BLACK;
@@ -1121,7 +1160,7 @@ impl ModelBsdf {
     }
 
     /// Adds the leaves of `material` with blend weight `scale`, on side `side`.
-    fn add(&mut self, material: &Material, uv: Vec2, scale: f32, side: f32) {
+    fn add(&mut self, material: &Material, uv: Vec2, scale: f32, side: f32, hero: Option<f32>) {
         if !positive(scale) {
             return;
         }
@@ -1129,19 +1168,19 @@ impl ModelBsdf {
             Material::Blend { weight, first, second } => {
                 let w = weight.eval(uv).r;
                 let w = if w.is_nan() { 0.0 } else { w.clamp(0.0, 1.0) };
-                self.add(first, uv, scale * (1.0 - w), side);
-                self.add(second, uv, scale * w, side);
+                self.add(first, uv, scale * (1.0 - w), side, hero);
+                self.add(second, uv, scale * w, side, hero);
             }
             Material::TwoSided { front, back } => {
                 if self.local_fixed.z * side < 0.0 {
-                    self.add(back.as_deref().unwrap_or(front), uv, scale, -side);
+                    self.add(back.as_deref().unwrap_or(front), uv, scale, -side, hero);
                 } else {
-                    self.add(front, uv, scale, side);
+                    self.add(front, uv, scale, side, hero);
                 }
             }
             leaf => {
                 if self.count < MAX_COMPONENTS
-                    && let Some(model) = Model::from_leaf(leaf, uv)
+                    && let Some(model) = Model::from_leaf(leaf, uv, hero)
                 {
                     self.components[self.count] = Component { model, scale, probability: 0.0, side, lobes: [0.0; 2] };
                     self.count += 1;
@@ -1249,6 +1288,7 @@ impl ModelBsdf {
                     cos_generated: eval.cos_generated,
                     pdf: eval.pdf,
                     lobe,
+                    dispersive: false,
                 })
             }
             Sampled::Delta { direction, rho, lobe } => {
@@ -1266,6 +1306,7 @@ impl ModelBsdf {
                     cos_generated: cos_geometric.abs(),
                     pdf: PdfPair { forward: pdf, reverse: pdf },
                     lobe,
+                    dispersive: matches!(c.model, Model::Dielectric { dispersive: true, .. }),
                 })
             }
         }
@@ -1437,6 +1478,7 @@ impl ReferenceBsdf {
                 cos_generated: eval.cos_generated,
                 pdf: eval.pdf,
                 lobe,
+                dispersive: false,
             });
         }
         if pick < p.diffuse + p.phong + p.reflect {
@@ -1478,6 +1520,7 @@ impl ReferenceBsdf {
             cos_generated: cos,
             pdf: PdfPair { forward: PdfW(probability), reverse: PdfW(probability) },
             lobe: LobeKind::SpecularReflection,
+            dispersive: false,
         }
     }
 
@@ -1541,6 +1584,7 @@ impl ReferenceBsdf {
             cos_generated: cos_t,
             pdf: PdfPair { forward: PdfW(probability), reverse: PdfW(probability) },
             lobe: LobeKind::SpecularTransmission,
+            dispersive: false,
         })
     }
 }

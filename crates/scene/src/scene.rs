@@ -8,6 +8,7 @@ use crate::camera::Camera;
 use crate::light::{BoundingSphere, Light};
 use crate::material::{Material, ShadingPoint};
 use crate::shape::Shape;
+use spectrum::{Rgb, SpectralMode};
 
 /// A shape with the index of its material and, if it emits, of its light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -207,6 +208,15 @@ impl Scene {
         let selection = self.light_selection.as_ref()?;
         let (index, probability) = selection.sample(u);
         Some((index as u32, &self.lights[index], probability))
+    }
+
+    /// Light `index`'s emitted quantity `rgb` (a radiance, intensity or irradiance one of its
+    /// queries returned, linear sRGB) in spectral mode `S`: in RGB mode `rgb` itself, in
+    /// spectral mode its upsampled spectrum times the colour space's illuminant.
+    #[inline]
+    pub fn emission<S: SpectralMode>(&self, index: u32, wavelengths: &S::Wavelengths, rgb: Rgb) -> S {
+        let _ = index;
+        S::from_emission(wavelengths, rgb)
     }
 
     /// Probability with which [`Scene::pick_light`] picks light `index`.

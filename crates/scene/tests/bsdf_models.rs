@@ -57,7 +57,13 @@ fn rough_conductor(alpha_u: f32, alpha_v: f32) -> Material {
 }
 
 fn dielectric(int_ior: f32, ext_ior: f32) -> Material {
-    Material::Dielectric { int_ior, ext_ior, specular_reflectance: white(), specular_transmittance: white() }
+    Material::Dielectric {
+        int_ior,
+        ext_ior,
+        specular_reflectance: white(),
+        specular_transmittance: white(),
+        dispersion: None,
+    }
 }
 
 fn rough_dielectric(alpha_u: f32, alpha_v: f32, int_ior: f32, ext_ior: f32) -> Material {

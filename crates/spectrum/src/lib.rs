@@ -4,6 +4,14 @@
 //! type everywhere. Spectral rendering with hero wavelengths (issue #5) will add a second mode
 //! behind a `SpectralMode` trait; the integrators then become generic over it.
 
+pub mod cie;
+pub mod ior;
+pub mod mode;
+pub mod upsample;
+pub mod wavelengths;
+
+pub use mode::{HERO_COUNT, Hero4, SpectralMode, Wavelengths4};
+
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Sub};
 
 /// Linear RGB triple (no colour space conversion is implied; the reference scenes are specified

@@ -1,5 +1,6 @@
 //! `<bsdf>` and `<texture>` plugins.
 
+use spectrum::ior::Ior;
 use std::sync::Arc;
 
 use math::Vec2;
@@ -144,6 +145,27 @@ impl<'a> Loader<'a> {
             return Err(p.error("the interior and exterior indices of refraction must differ"));
         }
         Ok((int_ior as f32, ext_ior as f32))
+    }
+
+    /// The renderer's extension for dispersion in spectral mode: `<string name="dispersion"
+    /// value="bk7"/>` (a named glass, see [`spectrum::ior::Ior::named`]) or the Cauchy
+    /// coefficients `<float name="cauchy_a" …/>` and `<float name="cauchy_b" …/>` (µm²).
+    /// Mitsuba has no dispersion and would reject these properties.
+    fn dispersion(&self, p: &Plugin) -> Result<Option<Ior>, SceneError> {
+        if let Some(name) = p.string("dispersion")? {
+            return match Ior::named(name) {
+                Some(ior) => Ok(Some(ior)),
+                None => Err(p.error(format!("unknown dispersive material '{name}' ({})", Ior::NAMES.join(", ")))),
+            };
+        }
+        match (p.float("cauchy_a")?, p.float("cauchy_b")?) {
+            (None, None) => Ok(None),
+            (Some(a), Some(b)) if a.is_finite() && b.is_finite() && a >= 1.0 && b >= 0.0 => {
+                Ok(Some(Ior::Cauchy { a: a as f32, b_um2: b as f32 }))
+            }
+            (Some(_), Some(_)) => Err(p.error("'cauchy_a' must be ≥ 1 and 'cauchy_b' ≥ 0 (µm²)")),
+            _ => Err(p.error("dispersion needs both 'cauchy_a' and 'cauchy_b' (µm²)")),
+        }
     }
 
     /// GGX roughness `(alpha_u, alpha_v)`: `alpha`, or both `alpha_u` and `alpha_v`; default
@@ -341,7 +363,14 @@ impl<'a> Loader<'a> {
                 let specular_transmittance = self.texture_prop(&p, "specular_transmittance", 1.0, reflectance)?;
                 match p.ty.as_str() {
                     "dielectric" => {
-                        Material::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance }
+                        let dispersion = self.dispersion(&p)?;
+                        Material::Dielectric {
+                            int_ior,
+                            ext_ior,
+                            specular_reflectance,
+                            specular_transmittance,
+                            dispersion,
+                        }
                     }
                     "thindielectric" => {
                         Material::ThinDielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance }

@@ -852,6 +852,7 @@ impl Builder {
                             ext_ior: 1.0,
                             specular_reflectance: white(),
                             specular_transmittance: white(),
+                            dispersion: None,
                         }
                     } else {
                         Material::RoughDielectric {

@@ -6,7 +6,7 @@
 use math::{Rng, Vec3};
 use scene::camera::PrimaryDensity;
 use scene::{Bsdf, Scene, TransportMode};
-use spectrum::Rgb;
+use spectrum::SpectralMode;
 
 use super::connect::{connect_vertices, next_event};
 use super::light_vertex::LightVertex;
@@ -18,15 +18,18 @@ use super::{Family, FamilyValues, Iteration, Techniques};
 /// Traces the camera sub-path through raster pixel `(x, y)` and returns its contributions by
 /// technique family.
 #[allow(clippy::too_many_arguments)]
-pub fn trace_camera_path(
+pub fn trace_camera_path<S: SpectralMode>(
     scene: &Scene,
     it: &Iteration,
     x: u32,
     y: u32,
     rng: &mut Rng,
-    light_path: &[LightVertex],
-    merge_source: Option<&MergeSource>,
+    light_path: &[LightVertex<S>],
+    merge_source: Option<&MergeSource<S>>,
+    wavelengths: &S::Wavelengths,
 ) -> FamilyValues {
+    let w = wavelengths;
+    let hero = S::hero_wavelength(w);
     let techniques = &it.techniques;
     let pixel = (y * scene.camera.width + x) as usize;
     // The constants (radius) of this camera path: global, or the pixel's own (§6.1).
@@ -45,12 +48,13 @@ pub fn trace_camera_path(
     };
     let mut path = SubPath {
         ray: primary.ray,
-        throughput: Rgb::splat(primary.weight),
+        throughput: S::splat(primary.weight),
         path_length: 1,
         mis: SubPathMis::camera_start(camera_pdf, k),
         is_finite_light: distance_on_first_segment,
         specular_path: true,
         origin_offset: 0.0,
+        terminated: false,
     };
 
     loop {
@@ -63,7 +67,8 @@ pub fn trace_camera_path(
                 && let Some(weight) =
                     emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
             {
-                out.add(Family::EmitterHit, path.throughput * emitted.radiance * weight);
+                let value = path.throughput * scene.emission::<S>(index, w, emitted.radiance) * weight;
+                out.add(Family::EmitterHit, value.to_rgb(w));
             }
             break;
         };
@@ -80,9 +85,11 @@ pub fn trace_camera_path(
             && let Some(weight) =
                 emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
         {
-            out.add(Family::EmitterHit, path.throughput * emitted.radiance * weight);
+            let value = path.throughput * scene.emission::<S>(light_index, w, emitted.radiance) * weight;
+            out.add(Family::EmitterHit, value.to_rgb(w));
         }
-        let Some(bsdf) = Bsdf::new(scene.material(&hit), &hit.shading_point(), -direction, TransportMode::Radiance)
+        let Some(bsdf) =
+            Bsdf::new_at(scene.material(&hit), &hit.shading_point(), -direction, TransportMode::Radiance, hero)
         else {
             break;
         };
@@ -94,20 +101,20 @@ pub fn trace_camera_path(
         if !bsdf.is_delta() {
             if techniques.connect {
                 // Next-event estimation (s = 1).
-                out.add(Family::NextEvent, next_event(scene, &path, &bsdf, hit.position, rng, k));
+                out.add(Family::NextEvent, next_event(scene, &path, &bsdf, hit.position, rng, k, w).to_rgb(w));
                 // Connections to the pixel's light sub-path (s, t > 1), stored in path order.
                 for light in light_path {
                     if light.path_length + 1 + path.path_length > it.max_length {
                         break;
                     }
-                    let value = connect_vertices(scene, &path, &bsdf, hit.position, light, it.rebase(), k);
-                    out.add(Family::Connection, value);
+                    let value = connect_vertices(scene, &path, &bsdf, hit.position, light, it.rebase(), k, w);
+                    out.add(Family::Connection, value.to_rgb(w));
                 }
             }
             if let Some(source) = merge_source {
                 let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
-                let merged = merge(&path, &bsdf, hit.position, source, radius, it.max_length, weighting, k);
-                out.add(Family::Merging, merged);
+                let merged = merge(&path, &bsdf, hit.position, source, radius, it.max_length, weighting, k, w);
+                out.add(Family::Merging, merged.to_rgb(w));
                 // Photon mapping stops at the first non-specular vertex; through a mixed
                 // vertex it continues along the specular lobes only.
                 if techniques.ppm {
@@ -118,7 +125,7 @@ pub fn trace_camera_path(
                 }
             }
         }
-        if !path.scatter(&bsdf, hit.position, rng, specular_only, k) {
+        if !path.scatter(&bsdf, hit.position, rng, specular_only, k, w) {
             break;
         }
     }
@@ -126,7 +133,12 @@ pub fn trace_camera_path(
 }
 
 /// MIS weight of an emitter hit, or `None` when the enabled techniques do not count it.
-fn emitter_weight(path: &SubPath, techniques: &Techniques, direct_pdf_a: f32, emission_pdf_w: f32) -> Option<f32> {
+fn emitter_weight<S: SpectralMode>(
+    path: &SubPath<S>,
+    techniques: &Techniques,
+    direct_pdf_a: f32,
+    emission_pdf_w: f32,
+) -> Option<f32> {
     if path.path_length == 1 {
         // Seen directly: no other technique samples it.
         return Some(1.0);

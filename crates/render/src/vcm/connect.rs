@@ -4,7 +4,7 @@
 
 use math::{Rng, Vec2, Vec3};
 use scene::{Bsdf, Scene};
-use spectrum::Rgb;
+use spectrum::{Rgb, SpectralMode};
 
 use super::Iteration;
 use super::light_vertex::LightVertex;
@@ -42,15 +42,16 @@ pub enum SplatTarget {
 /// for its pixel; otherwise a single splat (the pixel the vertex lands in for the box filter,
 /// the raster position for the others).
 #[allow(clippy::too_many_arguments)]
-pub fn connect_to_camera(
+pub fn connect_to_camera<S: SpectralMode>(
     scene: &Scene,
-    light: &SubPath,
+    light: &SubPath<S>,
     bsdf: &Bsdf,
     position: Vec3,
     weighted: bool,
     it: &Iteration,
     rng: &mut Rng,
     splats: &mut Vec<Splat>,
+    wavelengths: &S::Wavelengths,
 ) {
     let camera = &scene.camera;
     let u_lens = if camera.needs_lens_sample() { rng.uniform2() } else { [0.5, 0.5] };
@@ -61,7 +62,7 @@ pub fn connect_to_camera(
     let camera_pdf_a = connection.area_pdf(eval.cos_generated).0;
     let reverse = eval.pdf.reverse.0 * bsdf.continuation_probability();
     // The pixel integral is over the image plane: the estimate is f·T·(camera pdf)/N_L.
-    let unweighted = light.throughput * eval.value;
+    let unweighted = (light.throughput * S::from_reflectance(wavelengths, eval.value)).to_rgb(wavelengths);
     let weight_for = |k: &MisConstants| {
         if weighted {
             let light_mis = if it.rebase() { light.mis.for_constants(k) } else { light.mis };
@@ -100,19 +101,20 @@ pub fn connect_to_camera(
 }
 
 /// Next-event estimation from camera vertex `position` (s = 1), MIS-weighted (eqs. 44, 45).
-pub fn next_event(
+pub fn next_event<S: SpectralMode>(
     scene: &Scene,
-    camera: &SubPath,
+    camera: &SubPath<S>,
     bsdf: &Bsdf,
     position: Vec3,
     rng: &mut Rng,
     k: &MisConstants,
-) -> Rgb {
+    wavelengths: &S::Wavelengths,
+) -> S {
     let pick_u = rng.uniform();
     let u = rng.uniform2();
-    let Some((_, light, pick)) = scene.pick_light(pick_u) else { return Rgb::BLACK };
-    let Some(direct) = light.sample_direct(position, u, &scene.bounding_sphere) else { return Rgb::BLACK };
-    let Some(eval) = bsdf.evaluate(direct.direction) else { return Rgb::BLACK };
+    let Some((index, light, pick)) = scene.pick_light(pick_u) else { return S::default() };
+    let Some(direct) = light.sample_direct(position, u, &scene.bounding_sphere) else { return S::default() };
+    let Some(eval) = bsdf.evaluate(direct.direction) else { return S::default() };
     let continuation = bsdf.continuation_probability();
     let pdfs = NeePdfs {
         direct_w: direct.direct_pdf.0 * pick,
@@ -123,9 +125,11 @@ pub fn next_event(
         cos_at_light: direct.cos_at_light,
     };
     let weight = mis::nee_weight(&camera.mis, &pdfs, k);
-    let value = direct.radiance * eval.value * (weight * eval.cos_generated / pdfs.direct_w);
+    let value = scene.emission::<S>(index, wavelengths, direct.radiance)
+        * S::from_reflectance(wavelengths, eval.value)
+        * (weight * eval.cos_generated / pdfs.direct_w);
     if value.is_black() || scene.occluded(position, direct.direction, direct.distance) {
-        return Rgb::BLACK;
+        return S::default();
     }
     camera.throughput * value
 }
@@ -134,22 +138,23 @@ pub fn next_event(
 /// (eqs. 40, 41) with the camera path's constants `k`; `rebase` rebuilds the light vertex's
 /// dVC/dVM for them (eqs. 62, 63).
 #[allow(clippy::too_many_arguments)]
-pub fn connect_vertices(
+pub fn connect_vertices<S: SpectralMode>(
     scene: &Scene,
-    camera: &SubPath,
+    camera: &SubPath<S>,
     bsdf: &Bsdf,
     position: Vec3,
-    light: &LightVertex,
+    light: &LightVertex<S>,
     rebase: bool,
     k: &MisConstants,
-) -> Rgb {
+    wavelengths: &S::Wavelengths,
+) -> S {
     let to_light = light.position - position;
     let distance_squared = to_light.length_squared();
     let distance = distance_squared.sqrt();
     let direction = to_light / distance;
-    let Some(camera_eval) = bsdf.evaluate(direction) else { return Rgb::BLACK };
-    let Some(light_bsdf) = light.bsdf(scene) else { return Rgb::BLACK };
-    let Some(light_eval) = light_bsdf.evaluate(-direction) else { return Rgb::BLACK };
+    let Some(camera_eval) = bsdf.evaluate(direction) else { return S::default() };
+    let Some(light_bsdf) = light.bsdf(scene, S::hero_wavelength(wavelengths)) else { return S::default() };
+    let Some(light_eval) = light_bsdf.evaluate(-direction) else { return S::default() };
     let camera_continuation = bsdf.continuation_probability();
     let inv_d2 = 1.0 / distance_squared;
     let pdfs = ConnectionPdfs {
@@ -161,9 +166,13 @@ pub fn connect_vertices(
     let light_mis = if rebase { light.mis.for_constants(k) } else { light.mis };
     let weight = mis::connection_weight(&light_mis, &camera.mis, &pdfs, k);
     let geometry = camera_eval.cos_generated * light_eval.cos_generated * inv_d2;
-    let value = camera_eval.value * light_eval.value * (weight * geometry);
+    let both_terminated = camera.terminated && light.terminated;
+    let scale = if both_terminated { S::DOUBLE_TERMINATION } else { 1.0 };
+    let value = S::from_reflectance(wavelengths, camera_eval.value)
+        * S::from_reflectance(wavelengths, light_eval.value)
+        * (weight * geometry * scale);
     if value.is_black() || scene.occluded(position, direction, distance) {
-        return Rgb::BLACK;
+        return S::default();
     }
     camera.throughput * light.throughput * value
 }

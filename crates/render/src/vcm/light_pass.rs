@@ -3,6 +3,7 @@
 
 use math::{RAY_EPSILON, Ray, Rng};
 use scene::{Bsdf, Scene, TransportMode};
+use spectrum::SpectralMode;
 
 use super::Iteration;
 use super::connect::{Splat, connect_to_camera};
@@ -12,19 +13,21 @@ use super::subpath::SubPath;
 
 /// Traces one light sub-path: appends its stored vertices to `vertices` and its camera
 /// connections to `splats`.
-pub fn trace_light_path(
+pub fn trace_light_path<S: SpectralMode>(
     scene: &Scene,
     it: &Iteration,
     rng: &mut Rng,
-    vertices: &mut Vec<LightVertex>,
+    vertices: &mut Vec<LightVertex<S>>,
     splats: &mut Vec<Splat>,
+    wavelengths: &S::Wavelengths,
 ) {
+    let hero = S::hero_wavelength(wavelengths);
     let k = &it.constants;
     let techniques = &it.techniques;
     let pick_u = rng.uniform();
     let u_position = rng.uniform2();
     let u_direction = rng.uniform2();
-    let Some((_, light, pick)) = scene.pick_light(pick_u) else { return };
+    let Some((index, light, pick)) = scene.pick_light(pick_u) else { return };
     let emission = light.sample_emission(u_position, u_direction, &scene.bounding_sphere);
     let emission_pdf = emission.emission_pdf.0 * pick;
     let direct_pdf = emission.direct_pdf.0 * pick;
@@ -34,17 +37,20 @@ pub fn trace_light_path(
     let cos_used = if light.is_finite() { emission.cos_at_light } else { 1.0 };
     let mut path = SubPath {
         ray: Ray::new(emission.origin + RAY_EPSILON * emission.direction, emission.direction),
-        throughput: emission.energy / emission_pdf,
+        throughput: scene.emission::<S>(index, wavelengths, emission.energy) / emission_pdf,
         path_length: 1,
         mis: SubPathMis::light_start(emission_pdf, direct_pdf, cos_used, light.is_delta(), k),
         is_finite_light: light.is_finite(),
         specular_path: true,
         origin_offset: RAY_EPSILON,
+        terminated: false,
     };
 
     while let Some(hit) = scene.intersect(&path.ray) {
         let fixed = -path.ray.direction;
-        let Some(bsdf) = Bsdf::new(scene.material(&hit), &hit.shading_point(), fixed, TransportMode::Importance) else {
+        let Some(bsdf) =
+            Bsdf::new_at(scene.material(&hit), &hit.shading_point(), fixed, TransportMode::Importance, hero)
+        else {
             break;
         };
         let distance_squared = path.arrival_distance_squared(hit.distance);
@@ -63,17 +69,18 @@ pub fn trace_light_path(
                     uv: hit.uv,
                     fixed,
                     continuation: bsdf.continuation_probability(),
+                    terminated: path.terminated,
                 });
             }
             if techniques.connect_to_camera() && path.path_length < it.max_length {
-                connect_to_camera(scene, &path, &bsdf, hit.position, techniques.connect, it, rng, splats);
+                connect_to_camera(scene, &path, &bsdf, hit.position, techniques.connect, it, rng, splats, wavelengths);
             }
         }
         // A longer light sub-path could not be connected to any camera vertex.
         if path.path_length + 2 > it.max_length {
             break;
         }
-        if !path.scatter(&bsdf, hit.position, rng, false, k) {
+        if !path.scatter(&bsdf, hit.position, rng, false, k, wavelengths) {
             break;
         }
     }

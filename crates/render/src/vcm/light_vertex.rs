@@ -5,18 +5,18 @@
 
 use math::{Vec2, Vec3};
 use scene::{Bsdf, Scene, ShadingPoint, TransportMode};
-use spectrum::Rgb;
+use spectrum::{Rgb, SpectralMode};
 
 use super::mis::SubPathMis;
 
-/// A stored light sub-path vertex (100 bytes).
+/// A stored light sub-path vertex (100 bytes in RGB mode).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LightVertex {
+pub struct LightVertex<S: SpectralMode = Rgb> {
     /// Position on the surface.
     pub position: Vec3,
     /// Throughput of the light sub-path up to this vertex (emitted energy / pdfs, BSDFs and
     /// cosines of the earlier vertices).
-    pub throughput: Rgb,
+    pub throughput: S,
     /// MIS quantities at this vertex.
     pub mis: SubPathMis,
     /// Segments from the light to this vertex.
@@ -33,30 +33,38 @@ pub struct LightVertex {
     pub fixed: Vec3,
     /// Russian-roulette continuation probability of the vertex's BSDF.
     pub continuation: f32,
+    /// The light sub-path kept only its hero wavelength ([`super::subpath::SubPath::terminated`]).
+    pub terminated: bool,
 }
 
-impl LightVertex {
-    /// Rebuilds the vertex's BSDF (importance transport).
+impl<S: SpectralMode> LightVertex<S> {
+    /// Rebuilds the vertex's BSDF (importance transport) at the hero wavelength `hero`.
     #[inline]
-    pub fn bsdf(&self, scene: &Scene) -> Option<Bsdf> {
+    pub fn bsdf(&self, scene: &Scene, hero: Option<f32>) -> Option<Bsdf> {
         let point = ShadingPoint { geometric_normal: self.normal, shading_normal: self.shading_normal, uv: self.uv };
-        Bsdf::new(&scene.materials[self.material as usize], &point, self.fixed, TransportMode::Importance)
+        Bsdf::new_at(&scene.materials[self.material as usize], &point, self.fixed, TransportMode::Importance, hero)
     }
 }
 
 /// All light vertices of one iteration, grouped by light sub-path.
-#[derive(Clone, Debug, Default)]
-pub struct LightVertexStore {
+#[derive(Clone, Debug)]
+pub struct LightVertexStore<S: SpectralMode = Rgb> {
     /// The vertices, light sub-path after light sub-path, each in path order.
-    pub vertices: Vec<LightVertex>,
+    pub vertices: Vec<LightVertex<S>>,
     /// For light sub-path `p`, the index one past its last vertex.
     pub path_ends: Vec<u32>,
 }
 
-impl LightVertexStore {
+impl<S: SpectralMode> Default for LightVertexStore<S> {
+    fn default() -> Self {
+        Self { vertices: Vec::new(), path_ends: Vec::new() }
+    }
+}
+
+impl<S: SpectralMode> LightVertexStore<S> {
     /// The vertices of light sub-path `path`.
     #[inline]
-    pub fn path(&self, path: usize) -> &[LightVertex] {
+    pub fn path(&self, path: usize) -> &[LightVertex<S>] {
         let start = if path == 0 { 0 } else { self.path_ends[path - 1] as usize };
         &self.vertices[start..self.path_ends[path] as usize]
     }
@@ -68,30 +76,32 @@ impl LightVertexStore {
     }
 
     /// Bytes per stored vertex.
-    pub const BYTES_PER_VERTEX: usize = std::mem::size_of::<LightVertex>();
+    pub const BYTES_PER_VERTEX: usize = std::mem::size_of::<LightVertex<S>>();
 }
 
 /// What merging needs of a light vertex (64 bytes), stored in the range-search grid's slot
 /// order so that a query reads neighbouring vertices from contiguous memory. In the
 /// memory-efficient mode this is all that is kept of a light vertex.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MergeVertex {
+pub struct MergeVertex<S: SpectralMode = Rgb> {
     /// Position on the surface.
     pub position: Vec3,
     /// Unit direction towards the previous vertex.
     pub fixed: Vec3,
     /// Throughput of the light sub-path up to this vertex.
-    pub throughput: Rgb,
+    pub throughput: S,
     /// MIS quantities at this vertex.
     pub mis: SubPathMis,
     /// Segments from the light to this vertex.
     pub path_length: u32,
     /// Russian-roulette continuation probability of the vertex's BSDF.
     pub continuation: f32,
+    /// The light sub-path kept only its hero wavelength.
+    pub terminated: bool,
 }
 
-impl From<&LightVertex> for MergeVertex {
-    fn from(v: &LightVertex) -> Self {
+impl<S: SpectralMode> From<&LightVertex<S>> for MergeVertex<S> {
+    fn from(v: &LightVertex<S>) -> Self {
         Self {
             position: v.position,
             fixed: v.fixed,
@@ -99,6 +109,7 @@ impl From<&LightVertex> for MergeVertex {
             mis: v.mis,
             path_length: v.path_length,
             continuation: v.continuation,
+            terminated: v.terminated,
         }
     }
 }

@@ -8,6 +8,7 @@
 
 use math::Rng;
 use scene::Scene;
+use spectrum::{Hero4, Rgb};
 
 use super::light_pass::trace_light_path;
 use super::light_vertex::{LightVertex, MergeVertex};
@@ -55,15 +56,17 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
     let mut stored = 0usize;
     for path in 0..pilot {
         let mut rng = Rng::for_stream(seed, 0, LIGHT_STREAM | path as u64);
-        trace_light_path(scene, &it, &mut rng, &mut vertices, &mut splats);
+        // The vertex count does not depend on the spectral mode (sampling decisions use RGB
+        // values in both), so the pilot traces in RGB.
+        trace_light_path::<Rgb>(scene, &it, &mut rng, &mut vertices, &mut splats, &());
         stored += vertices.len();
         vertices.clear();
         splats.clear();
     }
     let vertices_per_path = stored as f64 / pilot as f64;
     let total_vertices = vertices_per_path * light_paths as f64;
-    let full = std::mem::size_of::<LightVertex>();
-    let merge = if techniques.merge { std::mem::size_of::<MergeVertex>() + GRID_BYTES_PER_VERTEX } else { 0 };
+    let (full, merge) = vertex_sizes(settings);
+    let merge = if techniques.merge { merge + GRID_BYTES_PER_VERTEX } else { 0 };
     let two_stage = total_vertices * (2 * full + merge) as f64;
     let memory_efficient = total_vertices * (2 * merge) as f64;
     MemoryEstimate {
@@ -78,9 +81,19 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
 /// stores at most `max_length − 1` vertices. When it fits, the pilot is not needed.
 pub fn upper_bound(scene: &Scene, settings: &VcmSettings) -> u64 {
     let techniques = Techniques::of(settings.algorithm);
-    let merge = if techniques.merge { std::mem::size_of::<MergeVertex>() + GRID_BYTES_PER_VERTEX } else { 0 };
-    let per_vertex = (2 * std::mem::size_of::<LightVertex>() + merge) as u64;
+    let (full, merge) = vertex_sizes(settings);
+    let merge = if techniques.merge { merge + GRID_BYTES_PER_VERTEX } else { 0 };
+    let per_vertex = (2 * full + merge) as u64;
     scene.camera.pixel_count() as u64 * u64::from(settings.max_length.saturating_sub(1)) * per_vertex
+}
+
+/// Bytes of a stored light vertex and of its merging copy in the settings' spectral mode.
+fn vertex_sizes(settings: &VcmSettings) -> (usize, usize) {
+    if settings.spectral {
+        (std::mem::size_of::<LightVertex<Hero4>>(), std::mem::size_of::<MergeVertex<Hero4>>())
+    } else {
+        (std::mem::size_of::<LightVertex<Rgb>>(), std::mem::size_of::<MergeVertex<Rgb>>())
+    }
 }
 
 /// Physical memory of the machine in bytes (Linux: `MemTotal` of `/proc/meminfo`), if known.

@@ -3,7 +3,7 @@
 
 use math::Vec3;
 use scene::Bsdf;
-use spectrum::Rgb;
+use spectrum::{Rgb, SpectralMode};
 
 use super::light_vertex::MergeVertex;
 use super::mis::{self, MisConstants};
@@ -21,9 +21,9 @@ pub enum MergeWeighting {
 
 /// The light vertices a camera vertex merges with.
 #[derive(Clone, Copy)]
-pub struct MergeSource<'a> {
+pub struct MergeSource<'a, S: SpectralMode = Rgb> {
     /// Vertices in the grid's slot order.
-    pub vertices: &'a [MergeVertex],
+    pub vertices: &'a [MergeVertex<S>],
     /// The range-search structure over them.
     pub grid: &'a HashGrid,
     /// The vertices' dVC/dVM were computed for other constants (another radius or iteration):
@@ -34,18 +34,19 @@ pub struct MergeSource<'a> {
 /// The merged contribution at camera vertex `position` within `radius` (throughput and kernel
 /// normalisation included).
 #[allow(clippy::too_many_arguments)]
-pub fn merge(
-    camera: &SubPath,
+pub fn merge<S: SpectralMode>(
+    camera: &SubPath<S>,
     bsdf: &Bsdf,
     position: Vec3,
-    source: &MergeSource,
+    source: &MergeSource<S>,
     radius: f32,
     max_length: u32,
     weighting: MergeWeighting,
     k: &MisConstants,
-) -> Rgb {
+    wavelengths: &S::Wavelengths,
+) -> S {
     let continuation = bsdf.continuation_probability();
-    let mut sum = Rgb::BLACK;
+    let mut sum = S::default();
     source.grid.for_each_slot_within(position, radius, |slot| {
         let light = &source.vertices[slot];
         // A merged path is one segment shorter than a connected one.
@@ -64,7 +65,8 @@ pub fn merge(
                 mis::merge_weight(&light_mis, &camera.mis, forward, reverse, k)
             }
         };
-        sum += eval.value * light.throughput * weight;
+        let weight = if camera.terminated && light.terminated { weight * S::DOUBLE_TERMINATION } else { weight };
+        sum += S::from_reflectance(wavelengths, eval.value) * light.throughput * weight;
     });
     camera.throughput * sum * k.vm_normalization
 }

@@ -21,6 +21,15 @@
 //!
 //! All MIS algebra lives in [`mis`]. Results do not depend on the thread count: every sub-path
 //! draws from its own random stream and light-tracing splats are added in path order.
+//!
+//! **Spectral mode.** The passes are generic over [`SpectralMode`]; [`VcmEngine`] picks
+//! [`Rgb`] or [`Hero4`] once, from [`VcmSettings::spectral`]. Sub-paths that meet must carry
+//! the same wavelengths: with merging on, every sub-path of an iteration uses the iteration's
+//! set (any light vertex may meet any camera path); without merging, light sub-path `i` and
+//! camera path `i` (the only pair that is connected) share the set of index `i`, so that the
+//! image sees many wavelengths per iteration. Light tracing splats and camera paths convert
+//! their estimates to linear sRGB as they are made ([`SpectralMode::to_rgb`]), so the film, the
+//! technique images and the NaN counting are the same in both modes.
 
 pub mod camera_pass;
 pub mod connect;
@@ -34,7 +43,7 @@ pub mod subpath;
 use math::{Rng, Vec2};
 use rayon::prelude::*;
 use scene::{FrameBuffer, Scene};
-use spectrum::Rgb;
+use spectrum::{Hero4, Rgb, SpectralMode};
 
 use crate::hash_grid::HashGrid;
 use camera_pass::trace_camera_path;
@@ -200,6 +209,8 @@ pub struct VcmSettings {
     /// before its camera sub-path and connects to it; merging uses the previous iteration's
     /// light vertices, of which only the 64-byte merging data is kept.
     pub memory_efficient: bool,
+    /// Spectral mode: four hero-rotated wavelengths per path ([`Hero4`]) instead of RGB.
+    pub spectral: bool,
 }
 
 impl VcmSettings {
@@ -212,6 +223,7 @@ impl VcmSettings {
             radius_alpha: 0.75,
             radius_mode: RadiusMode::Global,
             memory_efficient: false,
+            spectral: false,
         }
     }
 }
@@ -300,16 +312,103 @@ const LIGHT_STREAM: u64 = 1 << 62;
 /// Iteration index of the extra light pass that seeds merging in the memory-efficient mode.
 const SEED_ITERATION: u64 = u64::MAX;
 
-/// The engine and its buffers (kept across iterations).
+/// Offset of the random streams that draw wavelengths (spectral mode only, so RGB renders draw
+/// exactly the numbers they drew before spectral mode existed).
+const WAVELENGTH_STREAM: u64 = 1 << 61;
+
+/// Stream index of the wavelengths shared by all sub-paths of an iteration (merging on).
+const SHARED_WAVELENGTHS: u64 = (1 << 61) - 1;
+
+/// The wavelengths of sub-path pair `index` of `iteration`, or of the whole iteration when
+/// `shared` holds them.
+#[inline]
+fn wavelengths_for<S: SpectralMode>(
+    shared: &Option<S::Wavelengths>,
+    seed: u64,
+    iteration: u64,
+    index: u64,
+) -> S::Wavelengths {
+    match shared {
+        Some(w) => *w,
+        None => S::sample_wavelengths(Rng::for_stream(seed, iteration, WAVELENGTH_STREAM | index).uniform()),
+    }
+}
+
+/// The engine and its buffers (kept across iterations), in RGB or spectral mode.
 pub struct VcmEngine {
+    kind: EngineKind,
+}
+
+enum EngineKind {
+    Rgb(Box<Engine<Rgb>>),
+    Spectral(Box<Engine<Hero4>>),
+}
+
+impl VcmEngine {
+    /// An engine for `scene`; spectral when [`VcmSettings::spectral`] is set.
+    pub fn new(scene: &Scene, settings: VcmSettings) -> Self {
+        let kind = if settings.spectral {
+            EngineKind::Spectral(Box::new(Engine::new(scene, settings)))
+        } else {
+            EngineKind::Rgb(Box::new(Engine::new(scene, settings)))
+        };
+        Self { kind }
+    }
+
+    /// Keeps the per-pixel contributions of each technique family of every iteration (see
+    /// [`VcmEngine::family_frames`]).
+    pub fn record_families(&mut self, enabled: bool) {
+        match &mut self.kind {
+            EngineKind::Rgb(e) => e.family_frames = enabled.then(Vec::new),
+            EngineKind::Spectral(e) => e.family_frames = enabled.then(Vec::new),
+        }
+    }
+
+    /// Per-pixel contributions of the last iteration by family (light tracing included), if
+    /// recording is on. They sum to the iteration's frame.
+    pub fn family_frames(&self) -> Option<&[FamilyValues]> {
+        match &self.kind {
+            EngineKind::Rgb(e) => e.family_frames.as_deref(),
+            EngineKind::Spectral(e) => e.family_frames.as_deref(),
+        }
+    }
+
+    /// Statistics of the last iteration.
+    pub fn stats(&self) -> IterationStats {
+        match &self.kind {
+            EngineKind::Rgb(e) => e.stats,
+            EngineKind::Spectral(e) => e.stats,
+        }
+    }
+
+    /// The global merging radius of iteration `iteration` (0-based): r_0 · (i+1)^((α−1)/2).
+    pub fn radius(&self, iteration: u64) -> f32 {
+        match &self.kind {
+            EngineKind::Rgb(e) => e.radius(iteration),
+            EngineKind::Spectral(e) => e.radius(iteration),
+        }
+    }
+
+    /// Renders iteration `iteration` into `frame` (overwritten). Returns the number of rejected
+    /// (non-finite) contributions.
+    pub fn run_iteration(&mut self, scene: &Scene, seed: u64, iteration: u64, frame: &mut FrameBuffer) -> u64 {
+        match &mut self.kind {
+            EngineKind::Rgb(e) => e.run_iteration(scene, seed, iteration, frame),
+            EngineKind::Spectral(e) => e.run_iteration(scene, seed, iteration, frame),
+        }
+    }
+}
+
+/// The engine for one spectral mode.
+struct Engine<S: SpectralMode> {
     settings: VcmSettings,
     techniques: Techniques,
     base_radius: f32,
     /// Per-pixel footprint radii before the iteration schedule (per-pixel mode).
     pixel_footprints: Option<Vec<f32>>,
     pixel_radii: Vec<f32>,
-    store: LightVertexStore,
-    merge_vertices: Vec<MergeVertex>,
+    store: LightVertexStore<S>,
+    merge_vertices: Vec<MergeVertex<S>>,
     grid: HashGrid,
     /// Per-pixel contributions by family of the last iteration, when requested.
     family_frames: Option<Vec<FamilyValues>>,
@@ -319,15 +418,15 @@ pub struct VcmEngine {
 }
 
 /// One chunk of light sub-paths: vertices, per-path ends (relative), splats.
-type LightChunk = (Vec<LightVertex>, Vec<u32>, Vec<Splat>);
+type LightChunk<S> = (Vec<LightVertex<S>>, Vec<u32>, Vec<Splat>);
 
 /// One image row of the single-stage mode: light vertices, splats, per-pixel family values and
 /// rejected estimates.
-type RowResult = (Vec<LightVertex>, Vec<Splat>, Vec<FamilyValues>, RejectedCounts);
+type RowResult<S> = (Vec<LightVertex<S>>, Vec<Splat>, Vec<FamilyValues>, RejectedCounts);
 
-impl VcmEngine {
+impl<S: SpectralMode> Engine<S> {
     /// An engine for `scene`.
-    pub fn new(scene: &Scene, settings: VcmSettings) -> Self {
+    fn new(scene: &Scene, settings: VcmSettings) -> Self {
         let base_radius = settings.radius_factor * scene.bounding_sphere.radius;
         let pixel_footprints =
             (settings.radius_mode == RadiusMode::PerPixel).then(|| pixel_footprints(scene, base_radius));
@@ -346,36 +445,16 @@ impl VcmEngine {
         }
     }
 
-    /// Keeps the per-pixel contributions of each technique family of every iteration (see
-    /// [`VcmEngine::family_frames`]).
-    pub fn record_families(&mut self, enabled: bool) {
-        self.family_frames = enabled.then(Vec::new);
-    }
-
-    /// Per-pixel contributions of the last iteration by family (light tracing included), if
-    /// recording is on. They sum to the iteration's frame.
-    pub fn family_frames(&self) -> Option<&[FamilyValues]> {
-        self.family_frames.as_deref()
-    }
-
-    /// Statistics of the last iteration.
-    pub fn stats(&self) -> IterationStats {
-        self.stats
-    }
-
     /// The radius-reduction factor of iteration `iteration` (0-based): (i+1)^((α−1)/2).
     fn schedule(&self, iteration: u64) -> f32 {
         ((iteration.saturating_add(1)) as f32).powf(0.5 * (self.settings.radius_alpha - 1.0))
     }
 
-    /// The global merging radius of iteration `iteration` (0-based): r_0 · (i+1)^((α−1)/2).
-    pub fn radius(&self, iteration: u64) -> f32 {
+    fn radius(&self, iteration: u64) -> f32 {
         (self.base_radius * self.schedule(iteration)).max(1e-7)
     }
 
-    /// Renders iteration `iteration` into `frame` (overwritten). Returns the number of rejected
-    /// (non-finite) contributions.
-    pub fn run_iteration(&mut self, scene: &Scene, seed: u64, iteration: u64, frame: &mut FrameBuffer) -> u64 {
+    fn run_iteration(&mut self, scene: &Scene, seed: u64, iteration: u64, frame: &mut FrameBuffer) -> u64 {
         let pixel_count = frame.pixels.len();
         let techniques = self.techniques;
         let schedule = self.schedule(iteration);
@@ -395,10 +474,11 @@ impl VcmEngine {
             pixel_radii: self.pixel_footprints.as_ref().map(|_| pixel_radii.as_slice()),
             techniques,
         };
+        let shared = techniques.merge.then(|| wavelengths_for::<S>(&None, seed, iteration, SHARED_WAVELENGTHS));
         let (rejected, splats) = if self.settings.memory_efficient && !techniques.light_trace_only {
-            self.run_single_stage(scene, seed, iteration, &it, frame)
+            self.run_single_stage(scene, seed, iteration, &it, frame, &shared)
         } else {
-            self.run_two_stages(scene, seed, iteration, &it, frame)
+            self.run_two_stages(scene, seed, iteration, &it, frame, &shared)
         };
         self.pixel_radii = pixel_radii;
         self.stats.splats = splats;
@@ -416,10 +496,11 @@ impl VcmEngine {
         iteration: u64,
         it: &Iteration,
         frame: &mut FrameBuffer,
+        shared: &Option<S::Wavelengths>,
     ) -> (RejectedCounts, usize) {
         let pixel_count = frame.pixels.len();
         let start = std::time::Instant::now();
-        let chunks = trace_light_chunks(scene, seed, iteration, it, pixel_count);
+        let chunks = trace_light_chunks(scene, seed, iteration, it, pixel_count, shared);
         self.store.clear();
         for (vertices, ends, _) in &chunks {
             let base = self.store.vertices.len() as u32;
@@ -441,7 +522,8 @@ impl VcmEngine {
             }
             let mut rng = Rng::for_stream(seed, iteration, index as u64);
             let (x, y) = ((index % width) as u32, (index / width) as u32);
-            trace_camera_path(scene, it, x, y, &mut rng, store.path(index), merge_source.as_ref())
+            let wavelengths = wavelengths_for::<S>(shared, seed, iteration, index as u64);
+            trace_camera_path(scene, it, x, y, &mut rng, store.path(index), merge_source.as_ref(), &wavelengths)
         });
         let camera_pass = start.elapsed() - light_pass - grid_build;
         let splats = chunks.iter().map(|c| c.2.len()).sum();
@@ -454,8 +536,8 @@ impl VcmEngine {
         );
         self.stats.phases = PhaseTimes { light_pass, grid_build, camera_pass };
         self.stats.light_vertices = self.store.vertices.len();
-        self.stats.bytes_per_vertex = LightVertexStore::BYTES_PER_VERTEX
-            + if it.techniques.merge { std::mem::size_of::<MergeVertex>() } else { 0 };
+        self.stats.bytes_per_vertex = LightVertexStore::<S>::BYTES_PER_VERTEX
+            + if it.techniques.merge { std::mem::size_of::<MergeVertex<S>>() } else { 0 };
         (rejected, splats)
     }
 
@@ -467,6 +549,7 @@ impl VcmEngine {
         iteration: u64,
         it: &Iteration,
         frame: &mut FrameBuffer,
+        shared: &Option<S::Wavelengths>,
     ) -> (RejectedCounts, usize) {
         let pixel_count = frame.pixels.len();
         if it.techniques.merge && !self.merge_seeded {
@@ -475,7 +558,7 @@ impl VcmEngine {
             // those of the iteration before it (the same random streams, so the same vertices
             // as in an uninterrupted render).
             let source = if iteration == 0 { SEED_ITERATION } else { iteration - 1 };
-            let chunks = trace_light_chunks(scene, seed, source, it, pixel_count);
+            let chunks = trace_light_chunks(scene, seed, source, it, pixel_count, shared);
             self.store.clear();
             for (vertices, _, _) in &chunks {
                 self.store.vertices.extend_from_slice(vertices);
@@ -489,7 +572,7 @@ impl VcmEngine {
         let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: true };
         let merge_source = it.techniques.merge.then_some(source);
         let family_frames = self.family_frames.as_mut();
-        let rows: Vec<RowResult> = frame
+        let rows: Vec<RowResult<S>> = frame
             .pixels
             .par_chunks_mut(width)
             .enumerate()
@@ -502,7 +585,8 @@ impl VcmEngine {
                     let index = row * width + column;
                     let start = vertices.len();
                     let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
-                    trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats);
+                    let wavelengths = wavelengths_for::<S>(shared, seed, iteration, index as u64);
+                    trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &wavelengths);
                     let mut rng = Rng::for_stream(seed, iteration, index as u64);
                     let light_path = &vertices[start..];
                     let mut values = trace_camera_path(
@@ -513,6 +597,7 @@ impl VcmEngine {
                         &mut rng,
                         light_path,
                         merge_source.as_ref(),
+                        &wavelengths,
                     );
                     values.discard_overflow();
                     values.count_rejected(&mut rejected);
@@ -553,7 +638,7 @@ impl VcmEngine {
             self.build_merge_grid(next.max(1e-7));
         }
         self.stats.light_vertices = self.merge_vertices.len();
-        self.stats.bytes_per_vertex = std::mem::size_of::<MergeVertex>();
+        self.stats.bytes_per_vertex = std::mem::size_of::<MergeVertex<S>>();
         (rejected, splats)
     }
 
@@ -573,7 +658,14 @@ impl VcmEngine {
 }
 
 /// Traces `pixel_count` light sub-paths of `iteration` in parallel chunks, in order.
-fn trace_light_chunks(scene: &Scene, seed: u64, iteration: u64, it: &Iteration, pixel_count: usize) -> Vec<LightChunk> {
+fn trace_light_chunks<S: SpectralMode>(
+    scene: &Scene,
+    seed: u64,
+    iteration: u64,
+    it: &Iteration,
+    pixel_count: usize,
+    shared: &Option<S::Wavelengths>,
+) -> Vec<LightChunk<S>> {
     (0..pixel_count.div_ceil(LIGHT_CHUNK))
         .into_par_iter()
         .map(|chunk| {
@@ -583,7 +675,8 @@ fn trace_light_chunks(scene: &Scene, seed: u64, iteration: u64, it: &Iteration, 
             let end = ((chunk + 1) * LIGHT_CHUNK).min(pixel_count);
             for path in chunk * LIGHT_CHUNK..end {
                 let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
-                trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats);
+                let wavelengths = wavelengths_for::<S>(shared, seed, iteration, path as u64);
+                trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats, &wavelengths);
                 ends.push(vertices.len() as u32);
             }
             (vertices, ends, splats)

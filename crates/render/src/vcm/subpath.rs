@@ -2,18 +2,18 @@
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::Bsdf;
-use spectrum::Rgb;
+use spectrum::SpectralMode;
 
 use super::mis::{MisConstants, SubPathMis};
 
-/// A sub-path being traced.
+/// A sub-path being traced, carrying `S` ([`spectrum::Rgb`] or [`spectrum::Hero4`]).
 #[derive(Clone, Copy, Debug)]
-pub struct SubPath {
+pub struct SubPath<S: SpectralMode> {
     /// The next ray to trace (already offset from the last vertex).
     pub ray: Ray,
     /// Product of the BSDF values, cosines and inverse pdfs so far (for light sub-paths it
     /// starts with emitted energy / emission pdf).
-    pub throughput: Rgb,
+    pub throughput: S,
     /// Segments traced so far; the vertex about to be found is reached by `path_length`
     /// segments.
     pub path_length: u32,
@@ -28,9 +28,12 @@ pub struct SubPath {
     /// How far `ray.origin` lies past the previous vertex along the ray (0 for camera rays,
     /// [`RAY_EPSILON`] otherwise), so that MIS uses true vertex distances.
     pub origin_offset: f32,
+    /// A dispersive refraction kept only the hero wavelength (spectral mode): the throughput's
+    /// hero already carries the factor 4 ([`SpectralMode::terminate_secondary`]).
+    pub terminated: bool,
 }
 
-impl SubPath {
+impl<S: SpectralMode> SubPath<S> {
     /// Distance² between the previous vertex and a hit at ray distance `distance`, to pass
     /// to [`SubPathMis::arrive`]; `None` for the first segment from an infinite light (§5.1).
     pub fn arrival_distance_squared(&self, distance: f32) -> Option<f32> {
@@ -52,6 +55,7 @@ impl SubPath {
         rng: &mut Rng,
         specular_only: bool,
         k: &MisConstants,
+        wavelengths: &S::Wavelengths,
     ) -> bool {
         let u = rng.uniform3();
         let sample = if specular_only { bsdf.sample_specular(u) } else { bsdf.sample(u) };
@@ -64,7 +68,11 @@ impl SubPath {
         let forward = sample.pdf.forward.0 * continuation;
         let reverse = sample.pdf.reverse.0 * continuation;
         self.mis.scatter(sample.cos_generated, forward, reverse, specular, k);
-        self.throughput *= sample.value * (sample.cos_generated / forward);
+        self.throughput *= S::from_reflectance(wavelengths, sample.value) * (sample.cos_generated / forward);
+        if sample.dispersive && !self.terminated {
+            self.throughput = self.throughput.terminate_secondary();
+            self.terminated = true;
+        }
         self.specular_path &= specular;
         self.ray = Ray::new(position + RAY_EPSILON * sample.direction, sample.direction);
         self.origin_offset = RAY_EPSILON;

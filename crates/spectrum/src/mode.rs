@@ -1,0 +1,321 @@
+//! The spectral mode: what a path carries, chosen once at the top of the program.
+//!
+//! Integrators are generic over [`SpectralMode`], which has exactly two implementations:
+//!
+//! - [`Rgb`]: three linear-sRGB channels; the wavelength set is `()` and every conversion is the
+//!   identity, so RGB renders are bit-identical to a renderer without spectral support.
+//! - [`Hero4`]: four wavelengths per path (hero wavelength spectral sampling, Wilkie et al.
+//!   2014). The hero is drawn in primary sample space `u`; the others are rotated to
+//!   `(u + j/4) mod 1`, and all four are mapped through the visible-importance density
+//!   ([`crate::wavelengths::sample_visible`]), so each wavelength is marginally distributed by
+//!   that density and the four are stratified.
+//!
+//! **Reflectances stay RGB inside the BSDF.** Materials are specified in linear sRGB and
+//! upsampled by a *linear* basis ([`crate::upsample`]): ρ(λ) = r·b_r(λ) + g·b_g(λ) + b·b_b(λ).
+//! A BSDF value that is linear in its colour parameters (Lambert, Fresnel-weighted specular
+//! lobes, plastic, blends — every model but two) therefore has the spectral value
+//! `B(λ)·value_rgb`, which [`SpectralMode::from_reflectance`] applies with the four basis rows
+//! stored in the wavelength set (12 multiply-adds). The two non-linear models (a conductor's
+//! per-channel complex Fresnel, the non-linear plastic) are upsampled from their RGB result,
+//! exactly as an RGB reflectance texture would be. All sampling decisions (lobe selection,
+//! Russian roulette) then use the RGB values and so do not depend on the wavelengths: every
+//! wavelength has the same pdf, the HWSS balance heuristic over the four wavelengths reduces
+//! to equal weights, and the path-space MIS (the VCM weights) is computed once per path.
+//!
+//! **Dispersion** is the exception: a refraction direction depends on the wavelength, so the
+//! other wavelengths cannot have produced the hero's direction (their pdf is zero). The hero then
+//! carries the whole estimate ([`SpectralMode::terminate_secondary`]: its value times four, the
+//! others zero — only the hero's technique has a non-zero HWSS weight for such paths). A full path
+//! whose light *and* camera sub-paths were both terminated would count the factor four twice;
+//! the integrators multiply such contributions by [`SpectralMode::DOUBLE_TERMINATION`].
+
+use crate::Rgb;
+use std::fmt::Debug;
+use std::ops::{Add, AddAssign, Div, Mul, MulAssign};
+
+/// What a light path carries (throughput, radiance, importance) and the per-path wavelengths.
+pub trait SpectralMode:
+    Copy
+    + Clone
+    + Debug
+    + Default
+    + PartialEq
+    + Send
+    + Sync
+    + 'static
+    + Add<Output = Self>
+    + AddAssign
+    + Mul<Output = Self>
+    + MulAssign
+    + Mul<f32, Output = Self>
+    + MulAssign<f32>
+    + Div<f32, Output = Self>
+{
+    /// The wavelengths a path is traced at (and what is precomputed for them).
+    type Wavelengths: Copy + Debug + Send + Sync;
+
+    /// `"rgb"` or `"spectral"`.
+    const NAME: &'static str;
+
+    /// Factor for a contribution whose light and camera sub-paths both terminated their secondary
+    /// wavelengths (1 in RGB mode, 1/4 for [`Hero4`]).
+    const DOUBLE_TERMINATION: f32;
+
+    /// The same value for every channel / wavelength.
+    fn splat(v: f32) -> Self;
+
+    /// Draws the wavelengths from one uniform number in [0, 1).
+    fn sample_wavelengths(u: f32) -> Self::Wavelengths;
+
+    /// The hero wavelength in nm (`None` in RGB mode), for wavelength-dependent materials.
+    fn hero_wavelength(w: &Self::Wavelengths) -> Option<f32>;
+
+    /// A reflectance-like quantity given in linear sRGB (a BSDF value or albedo, a bounded
+    /// reflectance): upsampled with the linear basis.
+    fn from_reflectance(w: &Self::Wavelengths, rgb: Rgb) -> Self;
+
+    /// Emitted radiance (or intensity, irradiance) given in linear sRGB: the upsampled
+    /// reflectance times the colour space's illuminant (D65), scaled so that its colour is `rgb`.
+    fn from_emission(w: &Self::Wavelengths, rgb: Rgb) -> Self;
+
+    /// A spectral function of the wavelength in nm, evaluated at the wavelengths (RGB mode has
+    /// no wavelengths and returns `fallback`).
+    fn from_function(w: &Self::Wavelengths, f: impl Fn(f32) -> f32, fallback: Rgb) -> Self;
+
+    /// The linear-sRGB colour of an estimate (for the film): in spectral mode the Monte Carlo
+    /// estimate of ∫ v(λ) x̄ȳz̄(λ) dλ / ∫ ȳ over the wavelengths, converted to sRGB.
+    fn to_rgb(self, w: &Self::Wavelengths) -> Rgb;
+
+    /// Keeps only the hero wavelength, which then carries the whole estimate (dispersion).
+    fn terminate_secondary(self) -> Self;
+
+    /// Largest channel.
+    fn max_component(self) -> f32;
+
+    /// True when every channel is zero.
+    fn is_black(self) -> bool;
+
+    /// True when no channel is NaN or infinite.
+    fn is_finite(self) -> bool;
+}
+
+impl SpectralMode for Rgb {
+    type Wavelengths = ();
+    const NAME: &'static str = "rgb";
+    const DOUBLE_TERMINATION: f32 = 1.0;
+
+    #[inline]
+    fn splat(v: f32) -> Self {
+        Rgb::splat(v)
+    }
+    #[inline]
+    fn sample_wavelengths(_u: f32) {}
+    #[inline]
+    fn hero_wavelength(_w: &()) -> Option<f32> {
+        None
+    }
+    #[inline]
+    fn from_reflectance(_w: &(), rgb: Rgb) -> Self {
+        rgb
+    }
+    #[inline]
+    fn from_emission(_w: &(), rgb: Rgb) -> Self {
+        rgb
+    }
+    #[inline]
+    fn from_function(_w: &(), _f: impl Fn(f32) -> f32, fallback: Rgb) -> Self {
+        fallback
+    }
+    #[inline]
+    fn to_rgb(self, _w: &()) -> Rgb {
+        self
+    }
+    #[inline]
+    fn terminate_secondary(self) -> Self {
+        self
+    }
+    #[inline]
+    fn max_component(self) -> f32 {
+        Rgb::max_component(self)
+    }
+    #[inline]
+    fn is_black(self) -> bool {
+        Rgb::is_black(self)
+    }
+    #[inline]
+    fn is_finite(self) -> bool {
+        Rgb::is_finite(self)
+    }
+}
+
+/// Number of wavelengths a [`Hero4`] path carries.
+pub const HERO_COUNT: usize = 4;
+
+/// Values at the four wavelengths of a [`Wavelengths4`] set (index 0 is the hero). Units as for
+/// [`Rgb`], per nm where the quantity is spectral radiance.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Hero4(pub [f32; HERO_COUNT]);
+
+/// Four hero-rotated wavelengths and what the conversions need at them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wavelengths4 {
+    /// Wavelengths in nm; index 0 is the hero.
+    pub lambda: [f32; HERO_COUNT],
+    /// Their densities per nm ([`crate::wavelengths::visible_pdf`]).
+    pub pdf: [f32; HERO_COUNT],
+    /// The upsampling basis (b_r, b_g, b_b) at each wavelength.
+    pub basis: [[f32; 3]; HERO_COUNT],
+    /// The emitter factor at each wavelength: D65(λ)·∫ȳ/∫(D65·ȳ).
+    pub illuminant: [f32; HERO_COUNT],
+    /// Linear-sRGB weight of each wavelength: M_XYZ→sRGB · x̄ȳz̄(λ) / (4 · pdf(λ) · ∫ȳ).
+    pub to_rgb: [[f32; 3]; HERO_COUNT],
+}
+
+impl Wavelengths4 {
+    /// The set whose hero has primary sample `u` ∈ [0, 1).
+    pub fn sample(u: f32) -> Self {
+        let mut w = Wavelengths4 {
+            lambda: [0.0; HERO_COUNT],
+            pdf: [0.0; HERO_COUNT],
+            basis: [[0.0; 3]; HERO_COUNT],
+            illuminant: [0.0; HERO_COUNT],
+            to_rgb: [[0.0; 3]; HERO_COUNT],
+        };
+        let u = if u.is_finite() { u.clamp(0.0, 1.0) } else { 0.0 };
+        let illuminant_scale = crate::cie::cie_y_integral() / crate::cie::d65_y_integral();
+        let norm = 1.0 / (HERO_COUNT as f32 * crate::cie::cie_y_integral());
+        for j in 0..HERO_COUNT {
+            let uj = (u + j as f32 / HERO_COUNT as f32).fract();
+            let lambda = crate::wavelengths::sample_visible(uj);
+            let pdf = crate::wavelengths::visible_pdf(lambda);
+            w.lambda[j] = lambda;
+            w.pdf[j] = pdf;
+            w.basis[j] = crate::upsample::basis(lambda);
+            w.illuminant[j] = crate::cie::d65(lambda) * illuminant_scale;
+            let xyz = crate::cie::cmf(lambda);
+            let scale = if pdf > 0.0 { norm / pdf } else { 0.0 };
+            let rgb = crate::cie::xyz_to_linear_srgb([xyz[0] * scale, xyz[1] * scale, xyz[2] * scale]);
+            w.to_rgb[j] = rgb.to_array();
+        }
+        w
+    }
+}
+
+impl SpectralMode for Hero4 {
+    type Wavelengths = Wavelengths4;
+    const NAME: &'static str = "spectral";
+    const DOUBLE_TERMINATION: f32 = 1.0 / HERO_COUNT as f32;
+
+    #[inline]
+    fn splat(v: f32) -> Self {
+        Hero4([v; HERO_COUNT])
+    }
+    #[inline]
+    fn sample_wavelengths(u: f32) -> Wavelengths4 {
+        Wavelengths4::sample(u)
+    }
+    #[inline]
+    fn hero_wavelength(w: &Wavelengths4) -> Option<f32> {
+        Some(w.lambda[0])
+    }
+    #[inline]
+    fn from_reflectance(w: &Wavelengths4, rgb: Rgb) -> Self {
+        Hero4(std::array::from_fn(|j| {
+            let b = &w.basis[j];
+            b[0] * rgb.r + b[1] * rgb.g + b[2] * rgb.b
+        }))
+    }
+    #[inline]
+    fn from_emission(w: &Wavelengths4, rgb: Rgb) -> Self {
+        let mut v = Self::from_reflectance(w, rgb);
+        for (x, i) in v.0.iter_mut().zip(w.illuminant) {
+            *x *= i;
+        }
+        v
+    }
+    #[inline]
+    fn from_function(w: &Wavelengths4, f: impl Fn(f32) -> f32, _fallback: Rgb) -> Self {
+        Hero4(std::array::from_fn(|j| f(w.lambda[j])))
+    }
+    #[inline]
+    fn to_rgb(self, w: &Wavelengths4) -> Rgb {
+        let mut out = [0.0f32; 3];
+        for (v, weight) in self.0.iter().zip(&w.to_rgb) {
+            for c in 0..3 {
+                out[c] += v * weight[c];
+            }
+        }
+        Rgb::from_array(out)
+    }
+    #[inline]
+    fn terminate_secondary(self) -> Self {
+        let mut v = [0.0; HERO_COUNT];
+        v[0] = self.0[0] * HERO_COUNT as f32;
+        Hero4(v)
+    }
+    #[inline]
+    fn max_component(self) -> f32 {
+        self.0.iter().fold(self.0[0], |m, v| m.max(*v))
+    }
+    #[inline]
+    fn is_black(self) -> bool {
+        self.0.iter().all(|v| *v == 0.0)
+    }
+    #[inline]
+    fn is_finite(self) -> bool {
+        self.0.iter().all(|v| v.is_finite())
+    }
+}
+
+impl Add for Hero4 {
+    type Output = Hero4;
+    #[inline]
+    fn add(self, o: Hero4) -> Hero4 {
+        Hero4(std::array::from_fn(|j| self.0[j] + o.0[j]))
+    }
+}
+
+impl AddAssign for Hero4 {
+    #[inline]
+    fn add_assign(&mut self, o: Hero4) {
+        *self = *self + o;
+    }
+}
+
+impl Mul for Hero4 {
+    type Output = Hero4;
+    #[inline]
+    fn mul(self, o: Hero4) -> Hero4 {
+        Hero4(std::array::from_fn(|j| self.0[j] * o.0[j]))
+    }
+}
+
+impl MulAssign for Hero4 {
+    #[inline]
+    fn mul_assign(&mut self, o: Hero4) {
+        *self = *self * o;
+    }
+}
+
+impl Mul<f32> for Hero4 {
+    type Output = Hero4;
+    #[inline]
+    fn mul(self, s: f32) -> Hero4 {
+        Hero4(self.0.map(|v| v * s))
+    }
+}
+
+impl MulAssign<f32> for Hero4 {
+    #[inline]
+    fn mul_assign(&mut self, s: f32) {
+        *self = *self * s;
+    }
+}
+
+impl Div<f32> for Hero4 {
+    type Output = Hero4;
+    #[inline]
+    fn div(self, s: f32) -> Hero4 {
+        Hero4(self.0.map(|v| v / s))
+    }
+}
