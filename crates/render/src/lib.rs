@@ -4,11 +4,13 @@
 //!   combined by MIS), deliberately independent of the VCM engine.
 //! * [`eye_light`]: a fast `|cos|` shading preview.
 //! * [`vcm`]: the VCM engine (light tracing, PPM, BPM, BPT, VCM).
+//! * [`fluorescent`]: wavelength shifts at fluorescent vertices, shared by all integrators.
 //! * [`hash_grid`]: the range search for vertex merging.
 //! * [`driver`]: iterations or a time budget, threads, determinism, progress.
 
 pub mod driver;
 pub mod eye_light;
+pub mod fluorescent;
 pub mod hash_grid;
 pub mod path_tracer;
 pub mod vcm;

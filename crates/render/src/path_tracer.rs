@@ -13,6 +13,7 @@ use scene::{Bsdf, Scene, TransportMode};
 use spectrum::{Hero4, Rgb, SpectralMode};
 
 use crate::balance_heuristic;
+use crate::fluorescent::{FluorescentVertex, view};
 
 /// Settings of the path tracer.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,7 +38,8 @@ impl PathTracer {
     /// Radiance arriving at the camera along `camera_ray`, as linear sRGB.
     pub fn radiance(&self, scene: &Scene, camera_ray: Ray, rng: &mut Rng) -> Rgb {
         if self.spectral {
-            let wavelengths = Hero4::sample_wavelengths(rng.uniform());
+            let (u, v) = (rng.uniform(), rng.uniform());
+            let wavelengths = Hero4::sample_wavelengths(u, v, scene.has_fluorescence());
             radiance::<Hero4>(scene, camera_ray, rng, self.max_length, self.next_event_estimation, &wavelengths)
                 .to_rgb(&wavelengths)
         } else {
@@ -59,6 +61,8 @@ fn radiance<S: SpectralMode>(
     let mut ray = camera_ray;
     let mut throughput = S::splat(1.0);
     let mut terminated = false;
+    // The wavelength slot of each channel (moved by fluorescent shifts).
+    let mut slots = S::Slots::default();
     let mut result = S::default();
     let mut path_length = 1u32;
     // Solid-angle pdf of the last BSDF sample (Russian roulette included), and whether it
@@ -79,7 +83,7 @@ fn radiance<S: SpectralMode>(
                 } else {
                     balance_heuristic(last_pdf, emitted.direct_pdf.0 * scene.light_pick_probability(index))
                 };
-                result += throughput * scene.emission::<S>(index, w, emitted.radiance) * weight;
+                result += throughput * view(&slots, scene.emission::<S>(index, w, emitted.radiance)) * weight;
             }
             break;
         };
@@ -95,7 +99,7 @@ fn radiance<S: SpectralMode>(
                     let direct_pdf = emitted.direct_pdf.to_solid_angle(distance * distance, emitted.cos_at_light);
                     balance_heuristic(last_pdf, direct_pdf.0 * scene.light_pick_probability(light_index))
                 };
-                result += throughput * scene.emission::<S>(light_index, w, emitted.radiance) * weight;
+                result += throughput * view(&slots, scene.emission::<S>(light_index, w, emitted.radiance)) * weight;
             }
         }
         if path_length >= max_length {
@@ -108,6 +112,7 @@ fn radiance<S: SpectralMode>(
             break;
         };
         let continuation = bsdf.continuation_probability();
+        let fluorescent = FluorescentVertex::at(scene.material(&hit), hit.uv);
 
         // Next-event estimation (a path one segment longer).
         if nee
@@ -125,10 +130,18 @@ fn radiance<S: SpectralMode>(
                 } else {
                     balance_heuristic(light_pdf, eval.pdf.forward.0 * continuation)
                 };
-                result += throughput
-                    * scene.emission::<S>(index, w, direct.radiance)
-                    * S::from_reflectance(w, eval.value)
-                    * (eval.cos_generated * weight / light_pdf);
+                let emitted = scene.emission::<S>(index, w, direct.radiance);
+                let scale = eval.cos_generated * weight / light_pdf;
+                match &fluorescent {
+                    None if slots == S::Slots::default() => {
+                        result += throughput * emitted * S::from_reflectance(w, eval.value) * scale;
+                    }
+                    None => result += throughput * view(&slots, emitted * S::from_reflectance(w, eval.value)) * scale,
+                    Some(f) => {
+                        let label = f.sample_label::<S>(rng.uniform());
+                        result += throughput * view(&slots, f.apply_slots(w, label, eval.value, emitted)) * scale;
+                    }
+                }
             }
         }
 
@@ -138,7 +151,13 @@ fn radiance<S: SpectralMode>(
             break;
         }
         let pdf = sample.pdf.forward.0 * continuation;
-        throughput *= S::from_reflectance(w, sample.value) * (sample.cos_generated / pdf);
+        match &fluorescent {
+            None => throughput *= view(&slots, S::from_reflectance(w, sample.value)) * (sample.cos_generated / pdf),
+            Some(f) => {
+                let label = f.sample_label::<S>(rng.uniform());
+                throughput = f.apply_camera(w, label, sample.value, &mut slots, throughput) * (sample.cos_generated / pdf);
+            }
+        }
         if sample.dispersive && !terminated {
             throughput = throughput.terminate_secondary();
             terminated = true;

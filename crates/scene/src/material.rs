@@ -45,6 +45,7 @@ use math::{COSINE_EPSILON, Frame, INV_PI, PdfW, Vec2, Vec3, sqr, warp};
 use crate::microfacet::{Ggx, fresnel_conductor_rgb, fresnel_diffuse_reflectance, refract};
 use crate::texture::Texture;
 use spectrum::Rgb;
+use spectrum::fluorescence::Fluorescence;
 use spectrum::ior::Ior;
 
 /// Below this cosine between the generated direction and the mirrored fixed direction, the
@@ -197,6 +198,15 @@ pub enum Material {
         /// Material at weight 1.
         second: Box<Material>,
     },
+    /// Lambertian with fluorescence (one-sided): the diagonal reflectance `reflectance` plus
+    /// the re-emission of [`Fluorescence`]. The BSDF is the diffuse part; integrators apply
+    /// the wavelength shift (a top-level material only: not inside blends or two-sided).
+    Fluorescent {
+        /// Ordinary (diagonal) reflectance.
+        reflectance: Texture,
+        /// Absorption and re-emission.
+        fluorescence: Fluorescence,
+    },
     /// Makes a one-sided material two-sided: seen from behind it behaves as `back` (or as
     /// `front` when `back` is `None`) with the normal flipped.
     TwoSided {
@@ -225,8 +235,42 @@ impl Material {
         }
     }
 
-    /// Checks what a BSDF can represent: at most [`MAX_COMPONENTS`] leaves per side.
+    /// The fluorescence of a (top-level) fluorescent material.
+    #[inline]
+    pub fn fluorescence(&self) -> Option<&Fluorescence> {
+        match self {
+            Material::Fluorescent { fluorescence, .. } => Some(fluorescence),
+            _ => None,
+        }
+    }
+
+    /// Whether a fluorescent material is nested inside a blend or a two-sided material.
+    fn nests_fluorescence(&self) -> bool {
+        match self {
+            Material::Blend { first, second, .. } => {
+                first.fluorescence().is_some()
+                    || second.fluorescence().is_some()
+                    || first.nests_fluorescence()
+                    || second.nests_fluorescence()
+            }
+            Material::TwoSided { front, back } => {
+                front.fluorescence().is_some()
+                    || front.nests_fluorescence()
+                    || back.as_ref().is_some_and(|b| b.fluorescence().is_some() || b.nests_fluorescence())
+            }
+            _ => false,
+        }
+    }
+
+    /// Checks what a BSDF can represent: at most [`MAX_COMPONENTS`] leaves per side, fluorescent
+    /// materials only at the top level and conserving energy.
     pub fn validate(&self) -> Result<(), String> {
+        if self.nests_fluorescence() {
+            return Err("a fluorescent material cannot be blended or made two-sided".into());
+        }
+        if let Material::Fluorescent { reflectance, fluorescence } = self {
+            fluorescence.check_energy(reflectance.max_value().max_component())?;
+        }
         let per_side = |m: &Material| m.leaf_count();
         let largest = match self {
             Material::TwoSided { front, back } => per_side(front).max(back.as_ref().map_or(0, |b| per_side(b))),
@@ -683,6 +727,9 @@ impl Model {
         let model = match material {
             Material::Reference(_) | Material::Blend { .. } | Material::TwoSided { .. } => return None,
             Material::Diffuse { reflectance } => Model::Diffuse { reflectance: reflectance.eval(uv) },
+            // Unit reflectance: the integrators apply the diagonal reflectance and the
+            // re-emission themselves.
+            Material::Fluorescent { .. } => Model::Diffuse { reflectance: Rgb::WHITE },
             Material::Conductor { eta, k, specular_reflectance } => {
                 Model::Conductor { eta: *eta, k: *k, specular: specular_reflectance.eval(uv) }
             }

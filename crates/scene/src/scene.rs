@@ -210,6 +210,12 @@ impl Scene {
         Some((index as u32, &self.lights[index], probability))
     }
 
+    /// Whether any material is fluorescent (spectral mode then draws its wavelengths in
+    /// independent pairs, see [`spectrum::Wavelengths4::paired`]).
+    pub fn has_fluorescence(&self) -> bool {
+        self.materials.iter().any(|m| m.fluorescence().is_some())
+    }
+
     /// Light `index`'s emitted quantity `rgb` (a radiance, intensity or irradiance one of its
     /// queries returned, linear sRGB) in spectral mode `S`: in RGB mode `rgb` itself, in
     /// spectral mode its upsampled spectrum times the colour space's illuminant.

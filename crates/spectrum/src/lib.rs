@@ -5,12 +5,13 @@
 //! behind a `SpectralMode` trait; the integrators then become generic over it.
 
 pub mod cie;
+pub mod fluorescence;
 pub mod ior;
 pub mod mode;
 pub mod upsample;
 pub mod wavelengths;
 
-pub use mode::{HERO_COUNT, Hero4, SpectralMode, Wavelengths4};
+pub use mode::{HERO_COUNT, Hero4, Slots, SpectralMode, Wavelengths4};
 
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Sub};
 

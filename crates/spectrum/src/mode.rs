@@ -30,6 +30,7 @@
 //! the integrators multiply such contributions by [`SpectralMode::DOUBLE_TERMINATION`].
 
 use crate::Rgb;
+use crate::fluorescence::Fluorescence;
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign};
 
@@ -54,6 +55,14 @@ pub trait SpectralMode:
     /// The wavelengths a path is traced at (and what is precomputed for them).
     type Wavelengths: Copy + Debug + Send + Sync;
 
+    /// Which wavelength slot (RGB: channel) each channel of a camera sub-path is currently at:
+    /// the identity until a fluorescent vertex shifts it ([`SpectralMode::shift_camera`]).
+    type Slots: Copy + Debug + Default + PartialEq + Send + Sync;
+
+    /// Number of input slots a fluorescent shift chooses among (RGB: the 3 channels; spectral:
+    /// the 2 wavelengths of the other independent pair).
+    const SHIFT_CHOICES: u32;
+
     /// `"rgb"` or `"spectral"`.
     const NAME: &'static str;
 
@@ -64,11 +73,30 @@ pub trait SpectralMode:
     /// The same value for every channel / wavelength.
     fn splat(v: f32) -> Self;
 
-    /// Draws the wavelengths from one uniform number in [0, 1).
-    fn sample_wavelengths(u: f32) -> Self::Wavelengths;
+    /// Draws the wavelengths from uniform numbers in [0, 1). `paired` (scenes with
+    /// fluorescence) draws two independent stratified pairs instead of four rotated
+    /// wavelengths, so that a fluorescent shift can take its input wavelength from the other
+    /// pair, independent of its output wavelength.
+    fn sample_wavelengths(u: f32, v: f32, paired: bool) -> Self::Wavelengths;
 
-    /// The hero wavelength in nm (`None` in RGB mode), for wavelength-dependent materials.
+    /// The hero wavelength in nm (`None` in RGB mode and with paired wavelengths), for
+    /// dispersive materials.
     fn hero_wavelength(w: &Self::Wavelengths) -> Option<f32>;
+
+    /// The channels of `self` read from the slots `slots` (channel j takes slot `slots[j]`).
+    fn gather(self, slots: &Self::Slots) -> Self;
+
+    /// A light-side fluorescent shift with input choice `choice` (< [`SpectralMode::SHIFT_CHOICES`]):
+    /// output slot `a` takes `K(b → a) · v[b]` from its candidate input slot `b`, where the
+    /// kernel `K` is such that summing over the choices estimates the re-emitted quantity
+    /// (RGB: the reradiation matrix; spectral: `Q a(λ_b) e(λ_a) / (2 p(λ_b))`, the two input
+    /// wavelengths of the other pair estimating ∫ dλ_in). The Lambertian factor and the
+    /// probability of the choice are the caller's.
+    fn shift_light(w: &Self::Wavelengths, f: &Fluorescence, choice: u32, v: Self) -> Self;
+
+    /// The camera-side counterpart (the adjoint): channel `j` at slot `a = slots[j]` is
+    /// multiplied by `K(b → a)` and moves to its candidate input slot `b`.
+    fn shift_camera(w: &Self::Wavelengths, f: &Fluorescence, choice: u32, slots: &mut Self::Slots, t: Self) -> Self;
 
     /// A reflectance-like quantity given in linear sRGB (a BSDF value or albedo, a bounded
     /// reflectance): upsampled with the linear basis.
@@ -99,8 +127,20 @@ pub trait SpectralMode:
     fn is_finite(self) -> bool;
 }
 
+/// A per-channel slot map (identity by default).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Slots<const N: usize>(pub [u8; N]);
+
+impl<const N: usize> Default for Slots<N> {
+    fn default() -> Self {
+        Slots(std::array::from_fn(|i| i as u8))
+    }
+}
+
 impl SpectralMode for Rgb {
     type Wavelengths = ();
+    type Slots = Slots<3>;
+    const SHIFT_CHOICES: u32 = 3;
     const NAME: &'static str = "rgb";
     const DOUBLE_TERMINATION: f32 = 1.0;
 
@@ -109,10 +149,29 @@ impl SpectralMode for Rgb {
         Rgb::splat(v)
     }
     #[inline]
-    fn sample_wavelengths(_u: f32) {}
+    fn sample_wavelengths(_u: f32, _v: f32, _paired: bool) {}
     #[inline]
     fn hero_wavelength(_w: &()) -> Option<f32> {
         None
+    }
+    #[inline]
+    fn gather(self, slots: &Slots<3>) -> Self {
+        let v = self.to_array();
+        Rgb::new(v[slots.0[0] as usize], v[slots.0[1] as usize], v[slots.0[2] as usize])
+    }
+    fn shift_light(_w: &(), f: &Fluorescence, choice: u32, v: Self) -> Self {
+        let (m, b) = (f.rgb_matrix(), (choice as usize).min(2));
+        let input = v.to_array()[b];
+        Rgb::new(m[0][b] * input, m[1][b] * input, m[2][b] * input)
+    }
+    fn shift_camera(_w: &(), f: &Fluorescence, choice: u32, slots: &mut Slots<3>, t: Self) -> Self {
+        let (m, b) = (f.rgb_matrix(), (choice as usize).min(2));
+        let mut out = t.to_array();
+        for (value, slot) in out.iter_mut().zip(slots.0.iter_mut()) {
+            *value *= m[*slot as usize][b];
+            *slot = b as u8;
+        }
+        Rgb::from_array(out)
     }
     #[inline]
     fn from_reflectance(_w: &(), rgb: Rgb) -> Self {
@@ -169,23 +228,35 @@ pub struct Wavelengths4 {
     pub illuminant: [f32; HERO_COUNT],
     /// Linear-sRGB weight of each wavelength: M_XYZ→sRGB · x̄ȳz̄(λ) / (4 · pdf(λ) · ∫ȳ).
     pub to_rgb: [[f32; 3]; HERO_COUNT],
+    /// Two independent pairs (slots 0, 1 at `u, u + ½` and 2, 3 at `v, v + ½` in primary
+    /// sample space) instead of four rotated wavelengths.
+    pub paired: bool,
 }
 
 impl Wavelengths4 {
-    /// The set whose hero has primary sample `u` ∈ [0, 1).
-    pub fn sample(u: f32) -> Self {
+    /// The set whose hero has primary sample `u` ∈ [0, 1): four wavelengths rotated by a
+    /// quarter in primary sample space, or, when `paired`, two pairs rotated by a half, the
+    /// second pair starting at the independent `v`.
+    pub fn sample(u: f32, v: f32, paired: bool) -> Self {
         let mut w = Wavelengths4 {
             lambda: [0.0; HERO_COUNT],
             pdf: [0.0; HERO_COUNT],
             basis: [[0.0; 3]; HERO_COUNT],
             illuminant: [0.0; HERO_COUNT],
             to_rgb: [[0.0; 3]; HERO_COUNT],
+            paired,
         };
-        let u = if u.is_finite() { u.clamp(0.0, 1.0) } else { 0.0 };
-        let illuminant_scale = crate::cie::cie_y_integral() / crate::cie::d65_y_integral();
-        let norm = 1.0 / (HERO_COUNT as f32 * crate::cie::cie_y_integral());
+        let clean = |x: f32| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+        let (u, v) = (clean(u), clean(v));
+        let illuminant_scale = (crate::cie::CIE_Y_INTEGRAL / crate::cie::D65_Y_INTEGRAL) as f32;
+        let norm = 1.0 / (HERO_COUNT as f32 * crate::cie::CIE_Y_INTEGRAL as f32);
         for j in 0..HERO_COUNT {
-            let uj = (u + j as f32 / HERO_COUNT as f32).fract();
+            let uj = if paired {
+                let start = if j < 2 { u } else { v };
+                (start + 0.5 * (j % 2) as f32).fract()
+            } else {
+                (u + j as f32 / HERO_COUNT as f32).fract()
+            };
             let lambda = crate::wavelengths::sample_visible(uj);
             let pdf = crate::wavelengths::visible_pdf(lambda);
             w.lambda[j] = lambda;
@@ -201,8 +272,24 @@ impl Wavelengths4 {
     }
 }
 
+/// The input slot of a fluorescent shift into slot `a` with choice `choice` (paired layout:
+/// the other pair).
+#[inline]
+fn other_pair(a: usize, choice: u32) -> usize {
+    let c = (choice as usize).min(1);
+    if a < 2 { 2 + c } else { c }
+}
+
+/// The spectral shift kernel K(b → a) = Q a(λ_b) e(λ_a) / (2 p(λ_b)).
+#[inline]
+fn hero_kernel(w: &Wavelengths4, f: &Fluorescence, b: usize, a: usize) -> f32 {
+    if w.pdf[b] > 0.0 { f.kernel(w.lambda[b], w.lambda[a]) / (2.0 * w.pdf[b]) } else { 0.0 }
+}
+
 impl SpectralMode for Hero4 {
     type Wavelengths = Wavelengths4;
+    type Slots = Slots<HERO_COUNT>;
+    const SHIFT_CHOICES: u32 = 2;
     const NAME: &'static str = "spectral";
     const DOUBLE_TERMINATION: f32 = 1.0 / HERO_COUNT as f32;
 
@@ -211,12 +298,38 @@ impl SpectralMode for Hero4 {
         Hero4([v; HERO_COUNT])
     }
     #[inline]
-    fn sample_wavelengths(u: f32) -> Wavelengths4 {
-        Wavelengths4::sample(u)
+    fn sample_wavelengths(u: f32, v: f32, paired: bool) -> Wavelengths4 {
+        Wavelengths4::sample(u, v, paired)
     }
     #[inline]
     fn hero_wavelength(w: &Wavelengths4) -> Option<f32> {
-        Some(w.lambda[0])
+        (!w.paired).then_some(w.lambda[0])
+    }
+    #[inline]
+    fn gather(self, slots: &Slots<HERO_COUNT>) -> Self {
+        Hero4(std::array::from_fn(|j| self.0[slots.0[j] as usize]))
+    }
+    fn shift_light(w: &Wavelengths4, f: &Fluorescence, choice: u32, v: Self) -> Self {
+        Hero4(std::array::from_fn(|a| {
+            let b = other_pair(a, choice);
+            hero_kernel(w, f, b, a) * v.0[b]
+        }))
+    }
+    fn shift_camera(
+        w: &Wavelengths4,
+        f: &Fluorescence,
+        choice: u32,
+        slots: &mut Slots<HERO_COUNT>,
+        t: Self,
+    ) -> Self {
+        let mut out = t.0;
+        for (value, slot) in out.iter_mut().zip(slots.0.iter_mut()) {
+            let a = *slot as usize;
+            let b = other_pair(a, choice);
+            *value *= hero_kernel(w, f, b, a);
+            *slot = b as u8;
+        }
+        Hero4(out)
     }
     #[inline]
     fn from_reflectance(w: &Wavelengths4, rgb: Rgb) -> Self {

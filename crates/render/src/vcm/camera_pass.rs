@@ -8,7 +8,8 @@ use scene::camera::PrimaryDensity;
 use scene::{Bsdf, Scene, TransportMode};
 use spectrum::SpectralMode;
 
-use super::connect::{connect_vertices, next_event};
+use super::connect::{CameraEnd, connect_vertices, next_event};
+use crate::fluorescent::{FluorescentVertex, view};
 use super::light_vertex::LightVertex;
 use super::merge::{MergeSource, MergeWeighting, merge};
 use super::mis::{self, SubPathMis};
@@ -55,6 +56,7 @@ pub fn trace_camera_path<S: SpectralMode>(
         specular_path: true,
         origin_offset: 0.0,
         terminated: false,
+        slots: S::Slots::default(),
     };
 
     loop {
@@ -67,7 +69,7 @@ pub fn trace_camera_path<S: SpectralMode>(
                 && let Some(weight) =
                     emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
             {
-                let value = path.throughput * scene.emission::<S>(index, w, emitted.radiance) * weight;
+                let value = path.throughput * view(&path.slots, scene.emission::<S>(index, w, emitted.radiance)) * weight;
                 out.add(Family::EmitterHit, value.to_rgb(w));
             }
             break;
@@ -85,7 +87,8 @@ pub fn trace_camera_path<S: SpectralMode>(
             && let Some(weight) =
                 emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
         {
-            let value = path.throughput * scene.emission::<S>(light_index, w, emitted.radiance) * weight;
+            let value =
+                path.throughput * view(&path.slots, scene.emission::<S>(light_index, w, emitted.radiance)) * weight;
             out.add(Family::EmitterHit, value.to_rgb(w));
         }
         let Some(bsdf) =
@@ -97,23 +100,25 @@ pub fn trace_camera_path<S: SpectralMode>(
             break;
         }
 
+        let fluorescent = FluorescentVertex::at(scene.material(&hit), hit.uv);
+        let end = CameraEnd { bsdf: &bsdf, position: hit.position, fluorescent: fluorescent.as_ref() };
         let mut specular_only = false;
         if !bsdf.is_delta() {
             if techniques.connect {
                 // Next-event estimation (s = 1).
-                out.add(Family::NextEvent, next_event(scene, &path, &bsdf, hit.position, rng, k, w).to_rgb(w));
+                out.add(Family::NextEvent, next_event(scene, &path, &end, rng, k, w).to_rgb(w));
                 // Connections to the pixel's light sub-path (s, t > 1), stored in path order.
                 for light in light_path {
                     if light.path_length + 1 + path.path_length > it.max_length {
                         break;
                     }
-                    let value = connect_vertices(scene, &path, &bsdf, hit.position, light, it.rebase(), k, w);
+                    let value = connect_vertices(scene, &path, &end, light, it.rebase(), k, w, rng);
                     out.add(Family::Connection, value.to_rgb(w));
                 }
             }
             if let Some(source) = merge_source {
                 let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
-                let merged = merge(&path, &bsdf, hit.position, source, radius, it.max_length, weighting, k, w);
+                let merged = merge(&path, &end, source, radius, it.max_length, weighting, k, w, rng);
                 out.add(Family::Merging, merged.to_rgb(w));
                 // Photon mapping stops at the first non-specular vertex; through a mixed
                 // vertex it continues along the specular lobes only.
@@ -125,7 +130,7 @@ pub fn trace_camera_path<S: SpectralMode>(
                 }
             }
         }
-        if !path.scatter(&bsdf, hit.position, rng, specular_only, k, w) {
+        if !path.scatter(&bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true) {
             break;
         }
     }

@@ -7,6 +7,7 @@ use scene::{Bsdf, Scene};
 use spectrum::{Rgb, SpectralMode};
 
 use super::Iteration;
+use crate::fluorescent::{FluorescentVertex, view};
 use super::light_vertex::LightVertex;
 use super::mis::{self, ConnectionPdfs, MisConstants, NeePdfs};
 use super::subpath::SubPath;
@@ -45,14 +46,14 @@ pub enum SplatTarget {
 pub fn connect_to_camera<S: SpectralMode>(
     scene: &Scene,
     light: &SubPath<S>,
-    bsdf: &Bsdf,
-    position: Vec3,
+    end: &LightEnd,
     weighted: bool,
     it: &Iteration,
     rng: &mut Rng,
     splats: &mut Vec<Splat>,
     wavelengths: &S::Wavelengths,
 ) {
+    let (bsdf, position) = (end.bsdf, end.position);
     let camera = &scene.camera;
     let u_lens = if camera.needs_lens_sample() { rng.uniform2() } else { [0.5, 0.5] };
     let Some(connection) = camera.connect(position, u_lens) else { return };
@@ -62,7 +63,11 @@ pub fn connect_to_camera<S: SpectralMode>(
     let camera_pdf_a = connection.area_pdf(eval.cos_generated).0;
     let reverse = eval.pdf.reverse.0 * bsdf.continuation_probability();
     // The pixel integral is over the image plane: the estimate is f·T·(camera pdf)/N_L.
-    let unweighted = (light.throughput * S::from_reflectance(wavelengths, eval.value)).to_rgb(wavelengths);
+    let unweighted = match end.fluorescent {
+        None => light.throughput * S::from_reflectance(wavelengths, eval.value),
+        Some(f) => f.apply_slots(wavelengths, f.sample_label::<S>(rng.uniform()), eval.value, light.throughput),
+    }
+    .to_rgb(wavelengths);
     let weight_for = |k: &MisConstants| {
         if weighted {
             let light_mis = if it.rebase() { light.mis.for_constants(k) } else { light.mis };
@@ -100,16 +105,57 @@ pub fn connect_to_camera<S: SpectralMode>(
     }
 }
 
-/// Next-event estimation from camera vertex `position` (s = 1), MIS-weighted (eqs. 44, 45).
+/// The end of a light sub-path being connected to the camera.
+pub struct LightEnd<'a> {
+    /// Its BSDF (importance transport).
+    pub bsdf: &'a Bsdf,
+    /// Its position.
+    pub position: Vec3,
+    /// Its fluorescence, if any.
+    pub fluorescent: Option<&'a FluorescentVertex<'a>>,
+}
+
+/// The end of a camera sub-path being connected or merged.
+pub struct CameraEnd<'a> {
+    /// Its BSDF (radiance transport).
+    pub bsdf: &'a Bsdf,
+    /// Its position.
+    pub position: Vec3,
+    /// Its fluorescence, if any.
+    pub fluorescent: Option<&'a FluorescentVertex<'a>>,
+}
+
+impl CameraEnd<'_> {
+    /// What arrives at the camera path's channels from the light side: the slot-indexed
+    /// quantity `arriving` scattered at this vertex with BSDF value `value` (a label is drawn at
+    /// a fluorescent vertex), read through the camera path's slots.
+    #[inline]
+    pub fn receive<S: SpectralMode>(
+        &self,
+        camera: &SubPath<S>,
+        value: Rgb,
+        arriving: S,
+        rng: &mut Rng,
+        w: &S::Wavelengths,
+    ) -> S {
+        let scattered = match self.fluorescent {
+            None => arriving * S::from_reflectance(w, value),
+            Some(f) => f.apply_slots(w, f.sample_label::<S>(rng.uniform()), value, arriving),
+        };
+        view(&camera.slots, scattered)
+    }
+}
+
+/// Next-event estimation from camera vertex `end` (s = 1), MIS-weighted (eqs. 44, 45).
 pub fn next_event<S: SpectralMode>(
     scene: &Scene,
     camera: &SubPath<S>,
-    bsdf: &Bsdf,
-    position: Vec3,
+    end: &CameraEnd,
     rng: &mut Rng,
     k: &MisConstants,
     wavelengths: &S::Wavelengths,
 ) -> S {
+    let (bsdf, position) = (end.bsdf, end.position);
     let pick_u = rng.uniform();
     let u = rng.uniform2();
     let Some((index, light, pick)) = scene.pick_light(pick_u) else { return S::default() };
@@ -125,29 +171,29 @@ pub fn next_event<S: SpectralMode>(
         cos_at_light: direct.cos_at_light,
     };
     let weight = mis::nee_weight(&camera.mis, &pdfs, k);
-    let value = scene.emission::<S>(index, wavelengths, direct.radiance)
-        * S::from_reflectance(wavelengths, eval.value)
-        * (weight * eval.cos_generated / pdfs.direct_w);
+    let emitted = scene.emission::<S>(index, wavelengths, direct.radiance);
+    let value = end.receive(camera, eval.value, emitted, rng, wavelengths) * (weight * eval.cos_generated / pdfs.direct_w);
     if value.is_black() || scene.occluded(position, direct.direction, direct.distance) {
         return S::default();
     }
     camera.throughput * value
 }
 
-/// Connects camera vertex `position` (with `bsdf`) to a light vertex (s, t > 1), MIS-weighted
-/// (eqs. 40, 41) with the camera path's constants `k`; `rebase` rebuilds the light vertex's
-/// dVC/dVM for them (eqs. 62, 63).
+/// Connects camera vertex `end` to a light vertex (s, t > 1), MIS-weighted (eqs. 40, 41) with
+/// the camera path's constants `k`; `rebase` rebuilds the light vertex's dVC/dVM for them
+/// (eqs. 62, 63). Labels of fluorescent ends are drawn from `rng`.
 #[allow(clippy::too_many_arguments)]
 pub fn connect_vertices<S: SpectralMode>(
     scene: &Scene,
     camera: &SubPath<S>,
-    bsdf: &Bsdf,
-    position: Vec3,
+    end: &CameraEnd,
     light: &LightVertex<S>,
     rebase: bool,
     k: &MisConstants,
     wavelengths: &S::Wavelengths,
+    rng: &mut Rng,
 ) -> S {
+    let (bsdf, position) = (end.bsdf, end.position);
     let to_light = light.position - position;
     let distance_squared = to_light.length_squared();
     let distance = distance_squared.sqrt();
@@ -168,11 +214,25 @@ pub fn connect_vertices<S: SpectralMode>(
     let geometry = camera_eval.cos_generated * light_eval.cos_generated * inv_d2;
     let both_terminated = camera.terminated && light.terminated;
     let scale = if both_terminated { S::DOUBLE_TERMINATION } else { 1.0 };
-    let value = S::from_reflectance(wavelengths, camera_eval.value)
-        * S::from_reflectance(wavelengths, light_eval.value)
-        * (weight * geometry * scale);
+    let light_fluorescent = light.fluorescent(scene);
+    if end.fluorescent.is_none() && light_fluorescent.is_none() && camera.slots == S::Slots::default() {
+        let value = S::from_reflectance(wavelengths, camera_eval.value)
+            * S::from_reflectance(wavelengths, light_eval.value)
+            * (weight * geometry * scale);
+        if value.is_black() || scene.occluded(position, direction, distance) {
+            return S::default();
+        }
+        return camera.throughput * light.throughput * value;
+    }
+    // Fluorescence on the way: scatter the light throughput at the light end, then at the
+    // camera end, by slot; read it through the camera path's slots.
+    let leaving = match &light_fluorescent {
+        None => light.throughput * S::from_reflectance(wavelengths, light_eval.value),
+        Some(f) => f.apply_slots(wavelengths, f.sample_label::<S>(rng.uniform()), light_eval.value, light.throughput),
+    };
+    let value = end.receive(camera, camera_eval.value, leaving, rng, wavelengths) * (weight * geometry * scale);
     if value.is_black() || scene.occluded(position, direction, distance) {
         return S::default();
     }
-    camera.throughput * light.throughput * value
+    camera.throughput * value
 }

@@ -5,8 +5,10 @@ use math::{RAY_EPSILON, Ray, Rng};
 use scene::{Bsdf, Scene, TransportMode};
 use spectrum::SpectralMode;
 
+use crate::fluorescent::FluorescentVertex;
+
 use super::Iteration;
-use super::connect::{Splat, connect_to_camera};
+use super::connect::{LightEnd, Splat, connect_to_camera};
 use super::light_vertex::LightVertex;
 use super::mis::SubPathMis;
 use super::subpath::SubPath;
@@ -44,6 +46,7 @@ pub fn trace_light_path<S: SpectralMode>(
         specular_path: true,
         origin_offset: RAY_EPSILON,
         terminated: false,
+        slots: S::Slots::default(),
     };
 
     while let Some(hit) = scene.intersect(&path.ray) {
@@ -55,6 +58,7 @@ pub fn trace_light_path<S: SpectralMode>(
         };
         let distance_squared = path.arrival_distance_squared(hit.distance);
         path.mis.arrive(distance_squared, bsdf.cos_fixed());
+        let fluorescent = FluorescentVertex::at(scene.material(&hit), hit.uv);
 
         if !bsdf.is_delta() {
             if techniques.store_light_vertices() {
@@ -73,14 +77,15 @@ pub fn trace_light_path<S: SpectralMode>(
                 });
             }
             if techniques.connect_to_camera() && path.path_length < it.max_length {
-                connect_to_camera(scene, &path, &bsdf, hit.position, techniques.connect, it, rng, splats, wavelengths);
+                let endpoint = LightEnd { bsdf: &bsdf, position: hit.position, fluorescent: fluorescent.as_ref() };
+                connect_to_camera(scene, &path, &endpoint, techniques.connect, it, rng, splats, wavelengths);
             }
         }
         // A longer light sub-path could not be connected to any camera vertex.
         if path.path_length + 2 > it.max_length {
             break;
         }
-        if !path.scatter(&bsdf, hit.position, rng, false, k, wavelengths) {
+        if !path.scatter(&bsdf, hit.position, rng, false, k, wavelengths, fluorescent.as_ref(), false) {
             break;
         }
     }

@@ -44,6 +44,12 @@ impl<S: SpectralMode> LightVertex<S> {
         let point = ShadingPoint { geometric_normal: self.normal, shading_normal: self.shading_normal, uv: self.uv };
         Bsdf::new_at(&scene.materials[self.material as usize], &point, self.fixed, TransportMode::Importance, hero)
     }
+
+    /// The vertex's fluorescence, if its material is fluorescent.
+    #[inline]
+    pub fn fluorescent<'s>(&self, scene: &'s Scene) -> Option<crate::fluorescent::FluorescentVertex<'s>> {
+        crate::fluorescent::FluorescentVertex::at(&scene.materials[self.material as usize], self.uv)
+    }
 }
 
 /// All light vertices of one iteration, grouped by light sub-path.

@@ -7,7 +7,10 @@ use spectrum::{Rgb, SpectralMode};
 
 use super::light_vertex::MergeVertex;
 use super::mis::{self, MisConstants};
+use super::connect::CameraEnd;
 use super::subpath::SubPath;
+use crate::fluorescent::view;
+use math::Rng;
 use crate::hash_grid::HashGrid;
 
 /// How merges are weighted.
@@ -36,15 +39,18 @@ pub struct MergeSource<'a, S: SpectralMode = Rgb> {
 #[allow(clippy::too_many_arguments)]
 pub fn merge<S: SpectralMode>(
     camera: &SubPath<S>,
-    bsdf: &Bsdf,
-    position: Vec3,
+    end: &CameraEnd,
     source: &MergeSource<S>,
     radius: f32,
     max_length: u32,
     weighting: MergeWeighting,
     k: &MisConstants,
     wavelengths: &S::Wavelengths,
+    rng: &mut Rng,
 ) -> S {
+    let (bsdf, position): (&Bsdf, Vec3) = (end.bsdf, end.position);
+    // One label for the camera vertex, shared by all its merges.
+    let label = end.fluorescent.map(|f| (f, f.sample_label::<S>(rng.uniform())));
     let continuation = bsdf.continuation_probability();
     let mut sum = S::default();
     source.grid.for_each_slot_within(position, radius, |slot| {
@@ -66,7 +72,11 @@ pub fn merge<S: SpectralMode>(
             }
         };
         let weight = if camera.terminated && light.terminated { weight * S::DOUBLE_TERMINATION } else { weight };
-        sum += S::from_reflectance(wavelengths, eval.value) * light.throughput * weight;
+        let scattered = match label {
+            None => S::from_reflectance(wavelengths, eval.value) * light.throughput,
+            Some((f, label)) => f.apply_slots(wavelengths, label, eval.value, light.throughput),
+        };
+        sum += scattered * weight;
     });
-    camera.throughput * sum * k.vm_normalization
+    camera.throughput * view(&camera.slots, sum) * k.vm_normalization
 }

@@ -324,13 +324,18 @@ const SHARED_WAVELENGTHS: u64 = (1 << 61) - 1;
 #[inline]
 fn wavelengths_for<S: SpectralMode>(
     shared: &Option<S::Wavelengths>,
+    scene: &Scene,
     seed: u64,
     iteration: u64,
     index: u64,
 ) -> S::Wavelengths {
     match shared {
         Some(w) => *w,
-        None => S::sample_wavelengths(Rng::for_stream(seed, iteration, WAVELENGTH_STREAM | index).uniform()),
+        None => {
+            let mut rng = Rng::for_stream(seed, iteration, WAVELENGTH_STREAM | index);
+            let (u, v) = (rng.uniform(), rng.uniform());
+            S::sample_wavelengths(u, v, scene.has_fluorescence())
+        }
     }
 }
 
@@ -474,7 +479,7 @@ impl<S: SpectralMode> Engine<S> {
             pixel_radii: self.pixel_footprints.as_ref().map(|_| pixel_radii.as_slice()),
             techniques,
         };
-        let shared = techniques.merge.then(|| wavelengths_for::<S>(&None, seed, iteration, SHARED_WAVELENGTHS));
+        let shared = techniques.merge.then(|| wavelengths_for::<S>(&None, scene, seed, iteration, SHARED_WAVELENGTHS));
         let (rejected, splats) = if self.settings.memory_efficient && !techniques.light_trace_only {
             self.run_single_stage(scene, seed, iteration, &it, frame, &shared)
         } else {
@@ -522,7 +527,7 @@ impl<S: SpectralMode> Engine<S> {
             }
             let mut rng = Rng::for_stream(seed, iteration, index as u64);
             let (x, y) = ((index % width) as u32, (index / width) as u32);
-            let wavelengths = wavelengths_for::<S>(shared, seed, iteration, index as u64);
+            let wavelengths = wavelengths_for::<S>(shared, scene, seed, iteration, index as u64);
             trace_camera_path(scene, it, x, y, &mut rng, store.path(index), merge_source.as_ref(), &wavelengths)
         });
         let camera_pass = start.elapsed() - light_pass - grid_build;
@@ -585,7 +590,7 @@ impl<S: SpectralMode> Engine<S> {
                     let index = row * width + column;
                     let start = vertices.len();
                     let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
-                    let wavelengths = wavelengths_for::<S>(shared, seed, iteration, index as u64);
+                    let wavelengths = wavelengths_for::<S>(shared, scene, seed, iteration, index as u64);
                     trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &wavelengths);
                     let mut rng = Rng::for_stream(seed, iteration, index as u64);
                     let light_path = &vertices[start..];
@@ -675,7 +680,7 @@ fn trace_light_chunks<S: SpectralMode>(
             let end = ((chunk + 1) * LIGHT_CHUNK).min(pixel_count);
             for path in chunk * LIGHT_CHUNK..end {
                 let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
-                let wavelengths = wavelengths_for::<S>(shared, seed, iteration, path as u64);
+                let wavelengths = wavelengths_for::<S>(shared, scene, seed, iteration, path as u64);
                 trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats, &wavelengths);
                 ends.push(vertices.len() as u32);
             }

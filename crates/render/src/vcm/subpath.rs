@@ -4,6 +4,8 @@ use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::Bsdf;
 use spectrum::SpectralMode;
 
+use crate::fluorescent::{FluorescentVertex, view};
+
 use super::mis::{MisConstants, SubPathMis};
 
 /// A sub-path being traced, carrying `S` ([`spectrum::Rgb`] or [`spectrum::Hero4`]).
@@ -31,6 +33,9 @@ pub struct SubPath<S: SpectralMode> {
     /// A dispersive refraction kept only the hero wavelength (spectral mode): the throughput's
     /// hero already carries the factor 4 ([`SpectralMode::terminate_secondary`]).
     pub terminated: bool,
+    /// Camera sub-paths: the wavelength slot of each channel (moved by fluorescent shifts; the
+    /// identity for light sub-paths, whose throughput is indexed by slot).
+    pub slots: S::Slots,
 }
 
 impl<S: SpectralMode> SubPath<S> {
@@ -47,7 +52,10 @@ impl<S: SpectralMode> SubPath<S> {
 
     /// Samples the next direction at `position` from `bsdf` (only its specular lobes when
     /// `specular_only`), applies Russian roulette, updates throughput and MIS quantities
-    /// (eqs. 34–36, 53–55) and prepares the next ray. Returns `false` when the walk ends.
+    /// (eqs. 34–36, 53–55) and prepares the next ray. At a fluorescent vertex a label is drawn
+    /// and applied as a light sub-path (`camera` false: by slot) or as a camera sub-path does.
+    /// Returns `false` when the walk ends.
+    #[allow(clippy::too_many_arguments)]
     pub fn scatter(
         &mut self,
         bsdf: &Bsdf,
@@ -56,6 +64,8 @@ impl<S: SpectralMode> SubPath<S> {
         specular_only: bool,
         k: &MisConstants,
         wavelengths: &S::Wavelengths,
+        fluorescent: Option<&FluorescentVertex>,
+        camera: bool,
     ) -> bool {
         let u = rng.uniform3();
         let sample = if specular_only { bsdf.sample_specular(u) } else { bsdf.sample(u) };
@@ -68,7 +78,18 @@ impl<S: SpectralMode> SubPath<S> {
         let forward = sample.pdf.forward.0 * continuation;
         let reverse = sample.pdf.reverse.0 * continuation;
         self.mis.scatter(sample.cos_generated, forward, reverse, specular, k);
-        self.throughput *= S::from_reflectance(wavelengths, sample.value) * (sample.cos_generated / forward);
+        let scale = sample.cos_generated / forward;
+        match fluorescent {
+            None => self.throughput *= view(&self.slots, S::from_reflectance(wavelengths, sample.value)) * scale,
+            Some(f) => {
+                let label = f.sample_label::<S>(rng.uniform());
+                self.throughput = if camera {
+                    f.apply_camera(wavelengths, label, sample.value, &mut self.slots, self.throughput) * scale
+                } else {
+                    f.apply_slots(wavelengths, label, sample.value, self.throughput) * scale
+                };
+            }
+        }
         if sample.dispersive && !self.terminated {
             self.throughput = self.throughput.terminate_secondary();
             self.terminated = true;
