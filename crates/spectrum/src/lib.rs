@@ -4,6 +4,8 @@
 //! type everywhere. Spectral rendering with hero wavelengths (issue #5) will add a second mode
 //! behind a `SpectralMode` trait; the integrators then become generic over it.
 
+pub mod cie;
+
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Sub};
 
 /// Linear RGB triple (no colour space conversion is implied; the reference scenes are specified
