@@ -5,6 +5,7 @@
 //! behind a `SpectralMode` trait; the integrators then become generic over it.
 
 pub mod cie;
+pub mod upsample;
 pub mod wavelengths;
 
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Sub};
