@@ -5,6 +5,7 @@
 //! behind a `SpectralMode` trait; the integrators then become generic over it.
 
 pub mod cie;
+pub mod ior;
 pub mod tabulated;
 pub mod upsample;
 pub mod wavelengths;
