@@ -155,7 +155,8 @@ fn radiance<S: SpectralMode>(
             None => throughput *= view(&slots, S::from_reflectance(w, sample.value)) * (sample.cos_generated / pdf),
             Some(f) => {
                 let label = f.sample_label::<S>(rng.uniform());
-                throughput = f.apply_camera(w, label, sample.value, &mut slots, throughput) * (sample.cos_generated / pdf);
+                throughput =
+                    f.apply_camera(w, label, sample.value, &mut slots, throughput) * (sample.cos_generated / pdf);
             }
         }
         if sample.dispersive && !terminated {

@@ -1,13 +1,17 @@
 //! Colour quantities carried along light paths.
 //!
-//! For now the renderer works in linear RGB: [`Rgb`] is the radiance / throughput / reflectance
-//! type everywhere. Spectral rendering with hero wavelengths (issue #5) will add a second mode
-//! behind a `SpectralMode` trait; the integrators then become generic over it.
+//! The renderer works in linear sRGB ([`Rgb`]) or spectrally with hero wavelength sampling
+//! ([`Hero4`]); [`SpectralMode`] is what the integrators are generic over. The colour science
+//! lives beside it: the CIE tables and colour spaces ([`cie`]), the visible-wavelength sampler
+//! ([`wavelengths`]), RGB → spectrum upsampling ([`upsample`]), tabulated spectra
+//! ([`tabulated`]), dispersive indices of refraction ([`ior`]) and fluorescence
+//! ([`fluorescence`]).
 
 pub mod cie;
 pub mod fluorescence;
 pub mod ior;
 pub mod mode;
+pub mod tabulated;
 pub mod upsample;
 pub mod wavelengths;
 

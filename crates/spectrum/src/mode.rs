@@ -315,13 +315,7 @@ impl SpectralMode for Hero4 {
             hero_kernel(w, f, b, a) * v.0[b]
         }))
     }
-    fn shift_camera(
-        w: &Wavelengths4,
-        f: &Fluorescence,
-        choice: u32,
-        slots: &mut Slots<HERO_COUNT>,
-        t: Self,
-    ) -> Self {
+    fn shift_camera(w: &Wavelengths4, f: &Fluorescence, choice: u32, slots: &mut Slots<HERO_COUNT>, t: Self) -> Self {
         let mut out = t.0;
         for (value, slot) in out.iter_mut().zip(slots.0.iter_mut()) {
             let a = *slot as usize;

@@ -155,7 +155,10 @@ impl<'a> Loader<'a> {
         if let Some(name) = p.string("dispersion")? {
             return match Ior::named(name) {
                 Some(ior) => Ok(Some(ior)),
-                None => Err(p.error(format!("unknown dispersive material '{name}' ({})", Ior::NAMES.join(", ")))),
+                None => Err(p.error(format!(
+                    "unknown dispersive material '{name}' ({})",
+                    "bk7, fused quartz, fused silica, diamond"
+                ))),
             };
         }
         match (p.float("cauchy_a")?, p.float("cauchy_b")?) {

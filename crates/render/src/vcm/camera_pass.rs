@@ -9,12 +9,12 @@ use scene::{Bsdf, Scene, TransportMode};
 use spectrum::SpectralMode;
 
 use super::connect::{CameraEnd, connect_vertices, next_event};
-use crate::fluorescent::{FluorescentVertex, view};
 use super::light_vertex::LightVertex;
 use super::merge::{MergeSource, MergeWeighting, merge};
 use super::mis::{self, SubPathMis};
 use super::subpath::SubPath;
 use super::{Family, FamilyValues, Iteration, Techniques};
+use crate::fluorescent::{FluorescentVertex, view};
 
 /// Traces the camera sub-path through raster pixel `(x, y)` and returns its contributions by
 /// technique family.
@@ -69,7 +69,8 @@ pub fn trace_camera_path<S: SpectralMode>(
                 && let Some(weight) =
                     emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
             {
-                let value = path.throughput * view(&path.slots, scene.emission::<S>(index, w, emitted.radiance)) * weight;
+                let value =
+                    path.throughput * view(&path.slots, scene.emission::<S>(index, w, emitted.radiance)) * weight;
                 out.add(Family::EmitterHit, value.to_rgb(w));
             }
             break;

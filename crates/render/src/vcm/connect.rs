@@ -7,10 +7,10 @@ use scene::{Bsdf, Scene};
 use spectrum::{Rgb, SpectralMode};
 
 use super::Iteration;
-use crate::fluorescent::{FluorescentVertex, view};
 use super::light_vertex::LightVertex;
 use super::mis::{self, ConnectionPdfs, MisConstants, NeePdfs};
 use super::subpath::SubPath;
+use crate::fluorescent::{FluorescentVertex, view};
 
 /// A light-tracing contribution.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -172,7 +172,8 @@ pub fn next_event<S: SpectralMode>(
     };
     let weight = mis::nee_weight(&camera.mis, &pdfs, k);
     let emitted = scene.emission::<S>(index, wavelengths, direct.radiance);
-    let value = end.receive(camera, eval.value, emitted, rng, wavelengths) * (weight * eval.cos_generated / pdfs.direct_w);
+    let value =
+        end.receive(camera, eval.value, emitted, rng, wavelengths) * (weight * eval.cos_generated / pdfs.direct_w);
     if value.is_black() || scene.occluded(position, direct.direction, direct.distance) {
         return S::default();
     }

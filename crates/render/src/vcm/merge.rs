@@ -5,13 +5,13 @@ use math::Vec3;
 use scene::Bsdf;
 use spectrum::{Rgb, SpectralMode};
 
+use super::connect::CameraEnd;
 use super::light_vertex::MergeVertex;
 use super::mis::{self, MisConstants};
-use super::connect::CameraEnd;
 use super::subpath::SubPath;
 use crate::fluorescent::view;
-use math::Rng;
 use crate::hash_grid::HashGrid;
+use math::Rng;
 
 /// How merges are weighted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
