@@ -85,7 +85,7 @@ struct RenderArgs {
     /// Set a scene-file parameter, overriding its <default> (Mitsuba: `$NAME`); repeatable.
     #[arg(short = 'D', long = "define", value_name = "NAME=VALUE")]
     defines: Vec<String>,
-    /// Build the Cornell box from a bit mask instead (0-511, see `vcm scenes`); overrides --scene.
+    /// Build the Cornell box from a bit mask instead (0-1023, see `vcm scenes`); overrides --scene.
     #[arg(long, value_name = "N")]
     scene_mask: Option<u32>,
     /// Rendering algorithm.
@@ -212,13 +212,13 @@ enum SceneSource {
 
 /// Resolves `--scene`: a built-in id or name, or a scene file.
 fn scene_source(name: &str, defines: &[String]) -> Result<SceneSource> {
-    if let Some(s) = BUILTIN_SCENES.iter().find(|s| s.name == name || s.id.to_string() == name) {
+    if let Some(s) = cornell::builtin_scenes().find(|s| s.name == name || s.id.to_string() == name) {
         if let Some(define) = defines.first() {
             bail!("-D {define}: parameters apply to scene files, not to the built-in scene '{name}'");
         }
         return Ok(SceneSource::Builtin(s.mask));
     }
-    let valid: Vec<String> = BUILTIN_SCENES.iter().map(|s| format!("{} ({})", s.id, s.name)).collect();
+    let valid: Vec<String> = cornell::builtin_scenes().map(|s| format!("{} ({})", s.id, s.name)).collect();
     if Path::new(name).extension().is_some() || name.contains('/') {
         if !Path::new(name).exists() {
             bail!("scene file '{name}' does not exist (built-in scenes: {})", valid.join(", "));
@@ -586,12 +586,13 @@ fn write_technique_images(dir: &Path, families: &[scene::Film; 5], options: &io:
 
 fn run_scenes() {
     println!("{:<4} {:<22} {:<6} description", "id", "name", "mask");
-    for s in BUILTIN_SCENES {
+    for s in cornell::builtin_scenes() {
         println!("{:<4} {:<22} {:<6} {}", s.id, s.name, s.mask, s.description);
     }
     println!();
     println!("--scene-mask N builds other variants: ceiling light 1, sun 2, point 4, background 8,");
-    println!("large mirror 16, large glass 32, small mirror 64, small glass 128, glossy floor 256.");
+    println!("large mirror 16, large glass 32, small mirror 64, small glass 128, glossy floor 256,");
+    println!("fluorescent large sphere and blue-ish light 512.");
 }
 
 fn run_bench(args: BenchArgs) -> Result<()> {

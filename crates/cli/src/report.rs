@@ -28,7 +28,7 @@ use anyhow::{Context, Result, bail, ensure};
 use render::RenderSettings;
 use render::driver::Renderer;
 use scene::Film;
-use scene::cornell::BUILTIN_SCENES;
+use scene::cornell;
 
 use crate::{AlgorithmName, LoadedScene, SceneSource};
 
@@ -165,8 +165,7 @@ struct SceneEntry {
 fn resolve_scene(name: &str) -> Result<(SceneSource, String)> {
     let source = crate::scene_source(name, &[])?;
     let label = match &source {
-        SceneSource::Builtin(mask) => BUILTIN_SCENES
-            .iter()
+        SceneSource::Builtin(mask) => cornell::builtin_scenes()
             .find(|s| s.mask == *mask)
             .map_or_else(|| format!("cornell-mask-{mask}"), |s| s.name.to_string()),
         SceneSource::File(path, _) => {

@@ -28,6 +28,10 @@ pub const SMALL_MIRROR_SPHERE: u32 = 64;
 pub const SMALL_GLASS_SPHERE: u32 = 128;
 /// Mask bit: glossy floor and blue back wall (otherwise both white).
 pub const GLOSSY_FLOOR: u32 = 256;
+/// Mask bit (not in the specification): the large sphere is fluorescent (absorbs violet and
+/// blue, 370–490 nm, and glows green-yellow, 510–610 nm; see [`fluorescent_sphere`]) and the
+/// light box emits a blue-ish white.
+pub const FLUORESCENT: u32 = 512;
 
 /// A built-in scene reachable by id and name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,8 +74,39 @@ pub const BUILTIN_SCENES: [BuiltinScene; 4] = [
     },
 ];
 
+/// Scenes beyond the four references, reachable by id and name.
+pub const EXTRA_SCENES: [BuiltinScene; 1] = [BuiltinScene {
+    id: 4,
+    name: "cornell-fluorescent",
+    mask: FLUORESCENT | CEILING_LIGHT,
+    description: "fluorescent sphere under a blue-ish area light (fluorescence; best with --spectral)",
+}];
+
+/// Every built-in scene: the four references, then the extras.
+pub fn builtin_scenes() -> impl Iterator<Item = &'static BuiltinScene> {
+    BUILTIN_SCENES.iter().chain(EXTRA_SCENES.iter())
+}
+
+/// The fluorescent material of [`FLUORESCENT`]: diagonal reflectance 0.25, 90 % absorption at
+/// 430 nm (raised-cosine band 370–490 nm), 70 % of the absorbed energy re-emitted around
+/// 560 nm (510–610 nm). A kernel column sums to at most 0.25 + 0.7·0.9 = 0.88.
+pub fn fluorescent_sphere() -> Material {
+    use spectrum::fluorescence::{Band, Fluorescence};
+    let fluorescence = Fluorescence::new(
+        0.9,
+        Band { center_nm: 430.0, half_width_nm: 60.0 },
+        Band { center_nm: 560.0, half_width_nm: 50.0 },
+        0.7,
+    )
+    .expect("valid built-in fluorescence");
+    Material::Fluorescent { reflectance: crate::texture::Texture::Constant(Rgb::splat(0.25)), fluorescence }
+}
+
+/// Blue-ish white of the light box in the fluorescent scene (times its radiance).
+const FLUORESCENT_LIGHT_TINT: Rgb = Rgb::new(0.45, 0.6, 1.0);
+
 /// Largest valid mask value (all bits set).
-pub const MAX_MASK: u32 = 511;
+pub const MAX_MASK: u32 = 1023;
 
 /// Radiance of the light-box emitter (scene 1): 25.03329895614464 in every channel.
 pub const LIGHT_BOX_RADIANCE: f32 = f32::from_bits(0x41c8_4432); // 0x1.908864p+4 = 25.0332985
@@ -81,7 +116,7 @@ fn v(x: f32, y: f32, z: f32) -> Vec3 {
 }
 
 /// Builds the Cornell box for a scene `mask` (see the constants) at the given resolution.
-/// Returns `None` for a mask outside `0..=511`.
+/// Returns `None` for a mask outside `0..=1023`.
 pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
     if mask > MAX_MASK {
         return None;
@@ -110,6 +145,7 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
     const MIRROR: u32 = 6;
     const GLASS: u32 = 7;
     const BLUE: u32 = 8;
+    const FLUORESCENT_SPHERE: u32 = 9;
 
     // Box corners (§3.2).
     let c = [
@@ -163,7 +199,9 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
     let sphere = |center: Vec3, radius: f32, material: u32| {
         Primitive::new(Shape::Sphere(Sphere { center, radius }), material, None)
     };
-    if has(LARGE_MIRROR_SPHERE) {
+    if has(FLUORESCENT) {
+        primitives.push(sphere(large_center, large_radius, FLUORESCENT_SPHERE));
+    } else if has(LARGE_MIRROR_SPHERE) {
         primitives.push(sphere(large_center, large_radius, MIRROR));
     } else if has(LARGE_GLASS_SPHERE) {
         primitives.push(sphere(large_center, large_radius, GLASS));
@@ -211,6 +249,7 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
     // Lights in the order area(s), sun, point, background (§3.8).
     let emitter_radiance =
         if whole_ceiling_emits { Rgb::splat(3.0 / math::PI) } else { Rgb::splat(LIGHT_BOX_RADIANCE) };
+    let emitter_radiance = if has(FLUORESCENT) { emitter_radiance * FLUORESCENT_LIGHT_TINT } else { emitter_radiance };
     if whole_ceiling_emits || light_box_emits {
         let n = primitives.len();
         let emitters = if whole_ceiling_emits { [4, 5] } else { [n - 2, n - 1] };
@@ -242,11 +281,13 @@ pub fn build(mask: u32, width: u32, height: u32) -> Option<Scene> {
         width,
         height,
     );
-    let name = BUILTIN_SCENES
-        .iter()
+    let name = builtin_scenes()
         .find(|s| s.mask == mask)
         .map_or_else(|| format!("cornell-mask-{mask}"), |s| s.name.to_string());
-    let materials = materials.into_iter().map(Material::from).collect();
+    let mut materials: Vec<Material> = materials.into_iter().map(Material::from).collect();
+    if has(FLUORESCENT) {
+        materials.push(fluorescent_sphere());
+    }
     Some(Scene::new(name, primitives, materials, lights, camera))
 }
 
