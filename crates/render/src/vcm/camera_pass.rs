@@ -13,6 +13,7 @@ use super::light_vertex::LightVertex;
 use super::merge::{MergeSource, MergeWeighting, merge};
 use super::mis::{self, SubPathMis};
 use super::subpath::SubPath;
+use super::technique_images::{Record, TechniqueValues};
 use super::{Family, FamilyValues, Iteration, Techniques};
 
 /// Traces the camera sub-path through raster pixel `(x, y)` and returns its contributions by
@@ -27,12 +28,55 @@ pub fn trace_camera_path(
     light_path: &[LightVertex],
     merge_source: Option<&MergeSource>,
 ) -> FamilyValues {
+    let mut out = FamilyValues::default();
+    trace_camera_path_into(scene, it, x, y, rng, light_path, merge_source, &mut out);
+    out
+}
+
+/// [`trace_camera_path`], also filing every contribution under its (s, t) image when
+/// `techniques` is given; returns the family values (an overflowing estimate discarded in the
+/// images too, see [`TechniqueValues::finish`]).
+#[allow(clippy::too_many_arguments)]
+pub fn trace_camera_path_recorded(
+    scene: &Scene,
+    it: &Iteration,
+    x: u32,
+    y: u32,
+    rng: &mut Rng,
+    light_path: &[LightVertex],
+    merge_source: Option<&MergeSource>,
+    techniques: Option<TechniqueValues>,
+) -> FamilyValues {
+    match techniques {
+        None => trace_camera_path(scene, it, x, y, rng, light_path, merge_source),
+        Some(mut values) => {
+            trace_camera_path_into(scene, it, x, y, rng, light_path, merge_source, &mut values);
+            values.finish()
+        }
+    }
+}
+
+/// Traces the camera sub-path through raster pixel `(x, y)` and records its contributions in
+/// `out`, each with its technique's (s, t) (see [`super::technique_images`]): at camera vertex
+/// `z_{t−1}` (the sub-path has `t` vertices, `path_length = t − 1` segments) an emitter hit
+/// there is (0, t), next-event estimation from it (1, t), a connection to light vertex
+/// `y_{s−1}` (s, t) and a merge with it (s, t).
+#[allow(clippy::too_many_arguments)]
+pub fn trace_camera_path_into<R: Record>(
+    scene: &Scene,
+    it: &Iteration,
+    x: u32,
+    y: u32,
+    rng: &mut Rng,
+    light_path: &[LightVertex],
+    merge_source: Option<&MergeSource>,
+    out: &mut R,
+) {
     let techniques = &it.techniques;
     let pixel = (y * scene.camera.width + x) as usize;
     // The constants (radius) of this camera path: global, or the pixel's own (§6.1).
     let k = &it.pixel_constants(pixel);
     let radius = it.pixel_radius(pixel);
-    let mut out = FamilyValues::default();
     let camera = &scene.camera;
     // Raster position through the filter (its weight starts the throughput), then the lens.
     let primary = camera.sample_primary(x, y, rng);
@@ -63,7 +107,8 @@ pub fn trace_camera_path(
                 && let Some(weight) =
                     emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
             {
-                out.add(Family::EmitterHit, path.throughput * emitted.radiance * weight);
+                // The environment is the camera sub-path's last vertex.
+                out.record(Family::EmitterHit, 0, path.path_length + 1, path.throughput * emitted.radiance * weight);
             }
             break;
         };
@@ -71,6 +116,8 @@ pub fn trace_camera_path(
         let cos_fixed = hit.normal.dot(-direction).abs();
         let distance_squared = path.arrival_distance_squared(hit.distance);
         path.mis.arrive(distance_squared, cos_fixed);
+        // Camera sub-path vertices up to this hit.
+        let t = path.path_length + 1;
 
         // Emitter hit (s = 0).
         if let Some(light_index) = hit.light
@@ -80,7 +127,7 @@ pub fn trace_camera_path(
             && let Some(weight) =
                 emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
         {
-            out.add(Family::EmitterHit, path.throughput * emitted.radiance * weight);
+            out.record(Family::EmitterHit, 0, t, path.throughput * emitted.radiance * weight);
         }
         let Some(bsdf) = Bsdf::new(scene.material(&hit), &hit.shading_point(), -direction, TransportMode::Radiance)
         else {
@@ -94,20 +141,20 @@ pub fn trace_camera_path(
         if !bsdf.is_delta() {
             if techniques.connect {
                 // Next-event estimation (s = 1).
-                out.add(Family::NextEvent, next_event(scene, &path, &bsdf, hit.position, rng, k));
+                out.record(Family::NextEvent, 1, t, next_event(scene, &path, &bsdf, hit.position, rng, k));
                 // Connections to the pixel's light sub-path (s, t > 1), stored in path order.
                 for light in light_path {
                     if light.path_length + 1 + path.path_length > it.max_length {
                         break;
                     }
                     let value = connect_vertices(scene, &path, &bsdf, hit.position, light, it.rebase(), k);
-                    out.add(Family::Connection, value);
+                    out.record(Family::Connection, light.path_length + 1, t, value);
                 }
             }
             if let Some(source) = merge_source {
                 let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
-                let merged = merge(&path, &bsdf, hit.position, source, radius, it.max_length, weighting, k);
-                out.add(Family::Merging, merged);
+                let merged = merge(&path, &bsdf, hit.position, source, radius, it.max_length, weighting, k, out);
+                out.record(Family::Merging, 0, t, merged);
                 // Photon mapping stops at the first non-specular vertex; through a mixed
                 // vertex it continues along the specular lobes only.
                 if techniques.ppm {
@@ -122,7 +169,6 @@ pub fn trace_camera_path(
             break;
         }
     }
-    out
 }
 
 /// MIS weight of an emitter hit, or `None` when the enabled techniques do not count it.

@@ -8,6 +8,7 @@ use spectrum::Rgb;
 use super::light_vertex::MergeVertex;
 use super::mis::{self, MisConstants};
 use super::subpath::SubPath;
+use super::technique_images::Record;
 use crate::hash_grid::HashGrid;
 
 /// How merges are weighted.
@@ -32,9 +33,11 @@ pub struct MergeSource<'a> {
 }
 
 /// The merged contribution at camera vertex `position` within `radius` (throughput and kernel
-/// normalisation included).
+/// normalisation included). When `out` wants per-(s, t) values ([`Record::PER_TECHNIQUE`]),
+/// each merged light vertex's part is also staged there (s = its light sub-path vertices, the
+/// merged one included; t = the camera sub-path's vertices); the caller records the sum.
 #[allow(clippy::too_many_arguments)]
-pub fn merge(
+pub fn merge<R: Record>(
     camera: &SubPath,
     bsdf: &Bsdf,
     position: Vec3,
@@ -43,6 +46,7 @@ pub fn merge(
     max_length: u32,
     weighting: MergeWeighting,
     k: &MisConstants,
+    out: &mut R,
 ) -> Rgb {
     let continuation = bsdf.continuation_probability();
     let mut sum = Rgb::BLACK;
@@ -64,7 +68,12 @@ pub fn merge(
                 mis::merge_weight(&light_mis, &camera.mis, forward, reverse, k)
             }
         };
-        sum += eval.value * light.throughput * weight;
+        let part = eval.value * light.throughput * weight;
+        sum += part;
+        if R::PER_TECHNIQUE {
+            let t = camera.path_length + 1;
+            out.stage_merge(light.path_length + 1, t, camera.throughput * part * k.vm_normalization);
+        }
     });
     camera.throughput * sum * k.vm_normalization
 }

@@ -21,6 +21,10 @@
 //!
 //! All MIS algebra lives in [`mis`]. Results do not depend on the thread count: every sub-path
 //! draws from its own random stream and light-tracing splats are added in path order.
+//!
+//! On request the engine also files every contribution by family ([`Family`]) and by its
+//! (s, t) technique ([`technique_images`], which states the conventions); the frame is the same
+//! bit for bit with and without recording.
 
 pub mod camera_pass;
 pub mod connect;
@@ -30,6 +34,7 @@ pub mod memory;
 pub mod merge;
 pub mod mis;
 pub mod subpath;
+pub mod technique_images;
 
 use math::{Rng, Vec2};
 use rayon::prelude::*;
@@ -37,12 +42,13 @@ use scene::{FrameBuffer, Scene};
 use spectrum::Rgb;
 
 use crate::hash_grid::HashGrid;
-use camera_pass::trace_camera_path;
+use camera_pass::trace_camera_path_recorded;
 use connect::{Splat, SplatTarget};
 use light_pass::trace_light_path;
 use light_vertex::{LightVertex, LightVertexStore, MergeVertex};
 use merge::MergeSource;
 use mis::MisConstants;
+use technique_images::{TechniqueFrame, TechniqueLayout, TechniqueValues};
 
 /// The algorithms of the VCM engine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -149,13 +155,15 @@ impl FamilyValues {
     }
 
     /// Zeroes the values when their sum is not finite (finite values that overflow together),
-    /// counting the estimate against the family with the largest value.
-    fn discard_overflow(&mut self) {
-        if !self.total().is_finite() {
-            let largest = (0..5).max_by(|a, b| self.0[*a].max_component().total_cmp(&self.0[*b].max_component()));
-            self.0 = [Rgb::BLACK; 5];
-            self.1[largest.unwrap_or(0)] += 1;
+    /// counting the estimate against the family with the largest value. Returns whether it did.
+    fn discard_overflow(&mut self) -> bool {
+        if self.total().is_finite() {
+            return false;
         }
+        let largest = (0..5).max_by(|a, b| self.0[*a].max_component().total_cmp(&self.0[*b].max_component()));
+        self.0 = [Rgb::BLACK; 5];
+        self.1[largest.unwrap_or(0)] += 1;
+        true
     }
 
     /// Adds this estimate's discarded counts to `counts`.
@@ -313,6 +321,8 @@ pub struct VcmEngine {
     grid: HashGrid,
     /// Per-pixel contributions by family of the last iteration, when requested.
     family_frames: Option<Vec<FamilyValues>>,
+    /// Per-pixel contributions by (s, t) technique of the last iteration, when requested.
+    technique_frame: Option<TechniqueFrame>,
     stats: IterationStats,
     /// The memory-efficient mode has light vertices to merge with.
     merge_seeded: bool,
@@ -341,6 +351,7 @@ impl VcmEngine {
             merge_vertices: Vec::new(),
             grid: HashGrid::new(),
             family_frames: None,
+            technique_frame: None,
             stats: IterationStats::default(),
             merge_seeded: false,
         }
@@ -356,6 +367,18 @@ impl VcmEngine {
     /// recording is on. They sum to the iteration's frame.
     pub fn family_frames(&self) -> Option<&[FamilyValues]> {
         self.family_frames.as_deref()
+    }
+
+    /// Keeps the per-pixel contributions of every (s, t) technique of each iteration, laid out
+    /// as `layout` says (`None`: off, the default). See [`VcmEngine::technique_frame`].
+    pub fn record_techniques(&mut self, layout: Option<TechniqueLayout>) {
+        self.technique_frame = layout.map(|layout| TechniqueFrame::new(layout, 0));
+    }
+
+    /// Per-pixel contributions of the last iteration by (s, t) technique (light tracing
+    /// included), if recording is on. They sum to the iteration's frame up to float rounding.
+    pub fn technique_frame(&self) -> Option<&TechniqueFrame> {
+        self.technique_frame.as_ref()
     }
 
     /// Statistics of the last iteration.
@@ -435,20 +458,23 @@ impl VcmEngine {
         let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: it.rebase() };
         let merge_source = it.techniques.merge.then_some(source);
         let width = frame.width as usize;
-        let mut rejected = render_pixels(frame, self.family_frames.as_mut(), |index| {
-            if it.techniques.light_trace_only {
-                return FamilyValues::default();
-            }
-            let mut rng = Rng::for_stream(seed, iteration, index as u64);
-            let (x, y) = ((index % width) as u32, (index / width) as u32);
-            trace_camera_path(scene, it, x, y, &mut rng, store.path(index), merge_source.as_ref())
-        });
+        let mut rejected =
+            render_pixels(frame, self.family_frames.as_mut(), self.technique_frame.as_mut(), |index, techniques| {
+                if it.techniques.light_trace_only {
+                    return FamilyValues::default();
+                }
+                let mut rng = Rng::for_stream(seed, iteration, index as u64);
+                let (x, y) = ((index % width) as u32, (index / width) as u32);
+                let light_path = store.path(index);
+                trace_camera_path_recorded(scene, it, x, y, &mut rng, light_path, merge_source.as_ref(), techniques)
+            });
         let camera_pass = start.elapsed() - light_pass - grid_build;
         let splats = chunks.iter().map(|c| c.2.len()).sum();
         apply_splats(
             frame,
             &scene.camera,
             self.family_frames.as_mut(),
+            self.technique_frame.as_mut(),
             chunks.iter().map(|c| c.2.as_slice()),
             &mut rejected,
         );
@@ -489,15 +515,27 @@ impl VcmEngine {
         let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: true };
         let merge_source = it.techniques.merge.then_some(source);
         let family_frames = self.family_frames.as_mut();
+        let layout = self.technique_frame.as_ref().map(|t| t.layout);
+        let images = layout.map_or(0, |l| l.len());
+        if let Some(techniques) = &mut self.technique_frame {
+            techniques.clear(pixel_count);
+        }
+        // Row chunks of the technique values (none when not recorded).
+        let mut technique_rows: Vec<&mut [Rgb]> = match &mut self.technique_frame {
+            Some(techniques) => techniques.values.chunks_mut(width * images).collect(),
+            None => frame.pixels.chunks(width).map(|_| <&mut [Rgb]>::default()).collect(),
+        };
         let rows: Vec<RowResult> = frame
             .pixels
             .par_chunks_mut(width)
+            .zip(technique_rows.par_iter_mut())
             .enumerate()
-            .map(|(row, pixels)| {
+            .map(|(row, (pixels, technique_row))| {
                 let mut vertices = Vec::new();
                 let mut splats = Vec::new();
                 let mut families = Vec::new();
                 let mut rejected = RejectedCounts::default();
+                let mut stage = vec![Rgb::BLACK; images];
                 for (column, pixel) in pixels.iter_mut().enumerate() {
                     let index = row * width + column;
                     let start = vertices.len();
@@ -505,7 +543,11 @@ impl VcmEngine {
                     trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats);
                     let mut rng = Rng::for_stream(seed, iteration, index as u64);
                     let light_path = &vertices[start..];
-                    let mut values = trace_camera_path(
+                    let techniques = layout.map(|layout| {
+                        let pixel_images = &mut technique_row[column * images..(column + 1) * images];
+                        TechniqueValues::new(layout, pixel_images, &mut stage)
+                    });
+                    let mut values = trace_camera_path_recorded(
                         scene,
                         it,
                         column as u32,
@@ -513,6 +555,7 @@ impl VcmEngine {
                         &mut rng,
                         light_path,
                         merge_source.as_ref(),
+                        techniques,
                     );
                     values.discard_overflow();
                     values.count_rejected(&mut rejected);
@@ -541,6 +584,7 @@ impl VcmEngine {
             frame,
             &scene.camera,
             self.family_frames.as_mut(),
+            self.technique_frame.as_mut(),
             rows.iter().map(|r| r.1.as_slice()),
             &mut rejected,
         );
@@ -591,54 +635,64 @@ fn trace_light_chunks(scene: &Scene, seed: u64, iteration: u64, it: &Iteration, 
         .collect()
 }
 
-/// Fills `frame` (and the family frames, if recorded) with `trace(pixel)` for every pixel, in
-/// parallel over rows. Returns the number of rejected (non-finite) pixel estimates.
+/// Fills `frame` (and the family and technique frames, if recorded) with `trace(pixel,
+/// techniques)` for every pixel, in parallel over rows; `techniques` is where the pixel's
+/// (s, t) values go when recorded. Returns the number of rejected (non-finite) pixel estimates.
 fn render_pixels(
     frame: &mut FrameBuffer,
     family_frames: Option<&mut Vec<FamilyValues>>,
-    trace: impl Fn(usize) -> FamilyValues + Sync,
+    technique_frame: Option<&mut TechniqueFrame>,
+    trace: impl Fn(usize, Option<TechniqueValues>) -> FamilyValues + Sync,
 ) -> RejectedCounts {
     let width = frame.width as usize;
     let pixel_count = frame.pixels.len();
-    let evaluate = |index: usize, rejected: &mut RejectedCounts| {
-        let mut values = trace(index);
-        values.discard_overflow();
-        values.count_rejected(rejected);
-        values
-    };
-    let sum = |a: RejectedCounts, b: RejectedCounts| std::array::from_fn(|i| a[i] + b[i]);
-    match family_frames {
-        None => frame
-            .pixels
-            .par_chunks_mut(width)
-            .enumerate()
-            .map(|(row, pixels)| {
-                let mut rejected = RejectedCounts::default();
-                for (column, pixel) in pixels.iter_mut().enumerate() {
-                    *pixel = evaluate(row * width + column, &mut rejected).total();
-                }
-                rejected
-            })
-            .reduce(RejectedCounts::default, sum),
+    let rows = pixel_count.div_ceil(width.max(1));
+    // Per-row slices of the optional buffers (empty when not recorded).
+    let mut family_rows: Vec<&mut [FamilyValues]> = match family_frames {
         Some(families) => {
             families.clear();
             families.resize(pixel_count, FamilyValues::default());
-            frame
-                .pixels
-                .par_chunks_mut(width)
-                .zip(families.par_chunks_mut(width))
-                .enumerate()
-                .map(|(row, (pixels, family_row))| {
-                    let mut rejected = RejectedCounts::default();
-                    for (column, (pixel, family)) in pixels.iter_mut().zip(family_row).enumerate() {
-                        *family = evaluate(row * width + column, &mut rejected);
-                        *pixel = family.total();
-                    }
-                    rejected
-                })
-                .reduce(RejectedCounts::default, sum)
+            families.chunks_mut(width).collect()
         }
-    }
+        None => (0..rows).map(|_| <&mut [FamilyValues]>::default()).collect(),
+    };
+    let (layout, images) = match &technique_frame {
+        Some(t) => (Some(t.layout), t.layout.len()),
+        None => (None, 0),
+    };
+    let mut technique_rows: Vec<&mut [Rgb]> = match technique_frame {
+        Some(techniques) => {
+            techniques.clear(pixel_count);
+            techniques.values.chunks_mut(width * images).collect()
+        }
+        None => (0..rows).map(|_| <&mut [Rgb]>::default()).collect(),
+    };
+    let sum = |a: RejectedCounts, b: RejectedCounts| std::array::from_fn(|i| a[i] + b[i]);
+    frame
+        .pixels
+        .par_chunks_mut(width)
+        .zip(family_rows.par_iter_mut())
+        .zip(technique_rows.par_iter_mut())
+        .enumerate()
+        .map(|(row, ((pixels, family_row), technique_row))| {
+            let mut rejected = RejectedCounts::default();
+            let mut stage = vec![Rgb::BLACK; images];
+            for (column, pixel) in pixels.iter_mut().enumerate() {
+                let techniques = layout.map(|layout| {
+                    let pixel_images = &mut technique_row[column * images..(column + 1) * images];
+                    TechniqueValues::new(layout, pixel_images, &mut stage)
+                });
+                let mut values = trace(row * width + column, techniques);
+                values.discard_overflow();
+                values.count_rejected(&mut rejected);
+                *pixel = values.total();
+                if let Some(family) = family_row.get_mut(column) {
+                    *family = values;
+                }
+            }
+            rejected
+        })
+        .reduce(RejectedCounts::default, sum)
 }
 
 /// Adds light-tracing splats to the frame in the given (light sub-path) order: a pixel splat
@@ -648,13 +702,17 @@ fn apply_splats<'s>(
     frame: &mut FrameBuffer,
     camera: &scene::Camera,
     mut family_frames: Option<&mut Vec<FamilyValues>>,
+    mut technique_frame: Option<&mut TechniqueFrame>,
     splats: impl Iterator<Item = &'s [Splat]>,
     rejected: &mut RejectedCounts,
 ) {
-    let mut add = |pixel: u32, value: Rgb| {
+    let mut add = |pixel: u32, s: u32, value: Rgb| {
         frame.pixels[pixel as usize] += value;
         if let Some(families) = family_frames.as_deref_mut() {
             families[pixel as usize].add(Family::LightTracing, value);
+        }
+        if let Some(techniques) = technique_frame.as_deref_mut() {
+            techniques.add_splat(pixel as usize, s, value);
         }
     };
     for splat in splats.flatten() {
@@ -665,10 +723,10 @@ fn apply_splats<'s>(
             Rgb::BLACK
         };
         match splat.target {
-            SplatTarget::Pixel(pixel) => add(pixel, value),
+            SplatTarget::Pixel(pixel) => add(pixel, splat.s, value),
             SplatTarget::Filtered(raster) => {
                 for (pixel, filter) in camera.filter_pixels(raster) {
-                    add(pixel, value * filter);
+                    add(pixel, splat.s, value * filter);
                 }
             }
         }
