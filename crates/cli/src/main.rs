@@ -15,6 +15,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use render::driver::{Budget, Control};
+use render::vcm::technique_images::{TechniqueImages, TechniqueLayout};
 use render::vcm::{Family, RadiusMode};
 use render::{Algorithm, RenderSettings};
 use scene::Scene;
@@ -155,11 +156,17 @@ struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     variance: Option<PathBuf>,
     /// Write one linear image per technique family (emitter-hit, next-event, light-tracing,
-    /// connection, merging; they sum to the image) and a false-colour `vc-vm-share.png`
-    /// (red: share of vertex connection, green: share of vertex merging) into DIR. VCM engine
+    /// connection, merging; they sum to the image), a false-colour `vc-vm-share.png` (red:
+    /// share of vertex connection, green: share of vertex merging) and one linear image per
+    /// (s, t) technique up to --technique-length (`s0-t2.exr`, …, `merge-s2-t2.exr`, …, and
+    /// `longer-<family>.exr` for the rest; they also sum to the image) into DIR. VCM engine
     /// algorithms only.
     #[arg(long, value_name = "DIR")]
     techniques: Option<PathBuf>,
+    /// Longest path (in segments, 1 to 8) with its own per-(s, t) image in --techniques; longer
+    /// paths go to one `longer-<family>.exr` per family. Each image costs 36 bytes per pixel.
+    #[arg(long, value_name = "N", default_value_t = 4, requires = "techniques")]
+    technique_length: u32,
     /// Continue the render saved in FILE: scene, algorithm, resolution, seed, path length and
     /// radius settings come from the checkpoint (those options are ignored); --iterations
     /// counts the checkpoint's iterations too. Keeps checkpointing to FILE.
@@ -428,6 +435,7 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
         if resumed.is_some() {
             bail!("--techniques cannot be combined with --resume (checkpoints do not keep the technique images)");
         }
+        TechniqueLayout::new(args.technique_length).map_err(|e| anyhow::anyhow!("--technique-length: {e}"))?;
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create technique directory '{}'", dir.display()))?;
     }
@@ -499,6 +507,7 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
             .as_ref()
             .map(|_| (Duration::from_secs_f64(args.checkpoint_every), Box::new(save) as Box<dyn FnMut(&_) -> _>)),
         record_families: args.techniques.is_some(),
+        record_techniques: args.techniques.as_ref().and_then(|_| TechniqueLayout::new(args.technique_length).ok()),
     };
     let result = render::driver::render_with(&scene, &settings, control).map_err(anyhow::Error::msg)?;
     let film = &result.film;
@@ -509,6 +518,9 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
     }
     if let (Some(dir), Some(families)) = (&args.techniques, &result.family_films) {
         write_technique_images(dir, families, &options)?;
+    }
+    if let (Some(dir), Some(images)) = (&args.techniques, &result.technique_images) {
+        write_st_images(dir, images, film.width() as usize, film.height() as usize, &options)?;
     }
     if let Some(path) = &args.variance {
         let variance = io::Image { width: image.width, height: image.height, pixels: film.variance_of_mean() };
@@ -581,6 +593,22 @@ fn write_technique_images(dir: &Path, families: &[scene::Film; 5], options: &io:
         .collect();
     let image = io::Image { width, height, pixels: share };
     io::write_image(&dir.join("vc-vm-share.png"), &image, &io::WriteOptions::default())?;
+    Ok(())
+}
+
+/// Writes one image per (s, t) technique into `dir`, named as
+/// [`render::vcm::technique_images::TechniqueImage::name`] says.
+fn write_st_images(
+    dir: &Path,
+    images: &TechniqueImages,
+    width: usize,
+    height: usize,
+    options: &io::WriteOptions,
+) -> Result<()> {
+    for (index, technique) in images.layout().images().iter().enumerate() {
+        let image = io::Image { width, height, pixels: images.mean(index) };
+        io::write_image(&dir.join(format!("{}.exr", technique.name())), &image, options)?;
+    }
     Ok(())
 }
 

@@ -196,7 +196,56 @@ fn technique_images_sum_to_the_image() {
             }
         }
         assert!(techniques.join("vc-vm-share.png").exists());
+        // The per-(s, t) images up to the default length 4 (13 connection-type, 6 merges, 5
+        // longer buckets) sum to the image too.
+        let mut st_images: Vec<String> = std::fs::read_dir(&techniques)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with('s') || n.starts_with("merge-") || n.starts_with("longer-"))
+            .collect();
+        st_images.sort();
+        assert_eq!(st_images.len(), 24, "{st_images:?}");
+        assert!(st_images.iter().any(|n| n == "s0-t2.exr") && st_images.iter().any(|n| n == "merge-s3-t2.exr"));
+        let mut sum = vec![[0.0f64; 3]; image.pixels.len()];
+        for name in &st_images {
+            let part = io::read_image(&techniques.join(name)).unwrap();
+            for (s, p) in sum.iter_mut().zip(&part.pixels) {
+                for c in 0..3 {
+                    s[c] += p[c] as f64;
+                }
+            }
+        }
+        for (s, p) in sum.iter().zip(&image.pixels) {
+            for c in 0..3 {
+                let tolerance = 1e-5 * (p[c].abs() as f64).max(1e-3);
+                assert!(
+                    (s[c] - p[c] as f64).abs() <= tolerance,
+                    "scene {scene}: (s, t) images sum to {} vs {}",
+                    s[c],
+                    p[c]
+                );
+            }
+        }
     }
+    let out = temp_dir("techniques-length").join("x.exr");
+    for (length, message) in [("0", "technique length must be 1 to 8"), ("9", "technique length must be 1 to 8")] {
+        let dir = temp_dir("techniques-length").join("t");
+        assert_fails(
+            &[
+                "render",
+                "-i",
+                "1",
+                "-o",
+                out.to_str().unwrap(),
+                "--techniques",
+                dir.to_str().unwrap(),
+                "--technique-length",
+                length,
+            ],
+            &[message],
+        );
+    }
+    assert_fails(&["render", "-i", "1", "-o", out.to_str().unwrap(), "--technique-length", "3"], &["--techniques"]);
     let out = temp_dir("techniques-pt").join("x.exr");
     assert_fails(
         &["render", "-a", "pt", "-i", "1", "-o", out.to_str().unwrap(), "--techniques", "/tmp/t"],

@@ -17,6 +17,7 @@ use spectrum::Rgb;
 
 use crate::eye_light;
 use crate::path_tracer::PathTracer;
+use crate::vcm::technique_images::{TechniqueImages, TechniqueLayout};
 use crate::vcm::{Family, RadiusMode, VcmAlgorithm, VcmEngine, VcmSettings};
 
 /// The rendering algorithms. The names are the command-line spellings.
@@ -144,6 +145,9 @@ pub struct RenderOutput {
     /// Per technique family ([`Family::ALL`] order), when [`Control::record_families`] was set
     /// and the algorithm is one of the VCM engine's.
     pub family_films: Option<[Film; 5]>,
+    /// Per (s, t) technique, when [`Control::record_techniques`] was set and the algorithm is
+    /// one of the VCM engine's.
+    pub technique_images: Option<TechniqueImages>,
     /// Discarded non-finite estimates of this render's iterations per technique family
     /// ([`Family::ALL`] order; VCM engine only).
     pub rejected_by_family: Option<crate::vcm::RejectedCounts>,
@@ -269,6 +273,10 @@ pub struct Control<'a> {
     /// [`RenderOutput::family_films`]; they sum to the film. Ignored by the other integrators
     /// and when resuming (the families of earlier iterations are not in a checkpoint).
     pub record_families: bool,
+    /// Accumulate one image per (s, t) technique of the VCM engine, laid out as given
+    /// ([`crate::vcm::technique_images`]), returned in [`RenderOutput::technique_images`]; they
+    /// sum to the film. Ignored like `record_families`.
+    pub record_techniques: Option<TechniqueLayout>,
 }
 
 /// A callback that saves the film (a checkpoint); an error stops the render.
@@ -283,7 +291,7 @@ pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderOutput, 
 /// `control` says. `Budget::Iterations(n)` counts the iterations of the resumed film too;
 /// `Budget::Time` counts this call's time only.
 pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -> Result<RenderOutput, String> {
-    let Control { resume, stop, mut checkpoint, record_families } = control;
+    let Control { resume, stop, mut checkpoint, record_families, record_techniques } = control;
     let camera = &scene.camera;
     let mut film = match resume {
         Some(film) if (film.width(), film.height()) != (camera.width, camera.height) => {
@@ -303,6 +311,13 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
         Some(engine) if record_families && film.iterations() == 0 => {
             engine.record_families(true);
             Some(Family::ALL.map(|_| Film::new(camera.width, camera.height)))
+        }
+        _ => None,
+    };
+    let mut technique_images = match (renderer.vcm_engine_mut(), record_techniques) {
+        (Some(engine), Some(layout)) if film.iterations() == 0 => {
+            engine.record_techniques(Some(layout));
+            Some(TechniqueImages::new(layout, camera.pixel_count()))
         }
         _ => None,
     };
@@ -341,6 +356,11 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
                 family_film.add_iteration(&family_frame, 0);
             }
         }
+        if let (Some(images), Some(values)) =
+            (&mut technique_images, renderer.vcm_engine().and_then(|e| e.technique_frame()))
+        {
+            images.add_iteration(values)?;
+        }
         if let Some((every, save)) = &mut checkpoint
             && last_checkpoint.elapsed() >= *every
         {
@@ -373,6 +393,7 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
         vcm_stats,
         interrupted,
         family_films,
+        technique_images,
         rejected_by_family,
     })
 }

@@ -13,6 +13,7 @@ use super::light_vertex::LightVertex;
 use super::merge::{MergeSource, MergeWeighting, merge};
 use super::mis::{self, SubPathMis};
 use super::subpath::SubPath;
+use super::technique_images::{Record, TechniqueValues};
 use super::{Family, FamilyValues, Iteration, Techniques};
 use crate::fluorescent::{FluorescentVertex, view};
 
@@ -29,6 +30,52 @@ pub fn trace_camera_path<S: SpectralMode>(
     merge_source: Option<&MergeSource<S>>,
     wavelengths: &S::Wavelengths,
 ) -> FamilyValues {
+    let mut out = FamilyValues::default();
+    trace_camera_path_into(scene, it, x, y, rng, light_path, merge_source, wavelengths, &mut out);
+    out
+}
+
+/// [`trace_camera_path`], also filing every contribution under its (s, t) image when
+/// `techniques` is given; returns the family values (an overflowing estimate discarded in the
+/// images too, see [`TechniqueValues::finish`]).
+#[allow(clippy::too_many_arguments)]
+pub fn trace_camera_path_recorded<S: SpectralMode>(
+    scene: &Scene,
+    it: &Iteration,
+    x: u32,
+    y: u32,
+    rng: &mut Rng,
+    light_path: &[LightVertex<S>],
+    merge_source: Option<&MergeSource<S>>,
+    wavelengths: &S::Wavelengths,
+    techniques: Option<TechniqueValues>,
+) -> FamilyValues {
+    match techniques {
+        None => trace_camera_path(scene, it, x, y, rng, light_path, merge_source, wavelengths),
+        Some(mut values) => {
+            trace_camera_path_into(scene, it, x, y, rng, light_path, merge_source, wavelengths, &mut values);
+            values.finish()
+        }
+    }
+}
+
+/// Traces the camera sub-path through raster pixel `(x, y)` and records its contributions in
+/// `out`, each with its technique's (s, t) (see [`super::technique_images`]): at camera vertex
+/// `z_{t−1}` (the sub-path has `t` vertices, `path_length = t − 1` segments) an emitter hit
+/// there is (0, t), next-event estimation from it (1, t), a connection to light vertex
+/// `y_{s−1}` (s, t) and a merge with it (s, t).
+#[allow(clippy::too_many_arguments)]
+pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
+    scene: &Scene,
+    it: &Iteration,
+    x: u32,
+    y: u32,
+    rng: &mut Rng,
+    light_path: &[LightVertex<S>],
+    merge_source: Option<&MergeSource<S>>,
+    wavelengths: &S::Wavelengths,
+    out: &mut R,
+) {
     let w = wavelengths;
     let hero = S::hero_wavelength(w);
     let techniques = &it.techniques;
@@ -36,7 +83,6 @@ pub fn trace_camera_path<S: SpectralMode>(
     // The constants (radius) of this camera path: global, or the pixel's own (§6.1).
     let k = &it.pixel_constants(pixel);
     let radius = it.pixel_radius(pixel);
-    let mut out = FamilyValues::default();
     let camera = &scene.camera;
     // Raster position through the filter (its weight starts the throughput), then the lens.
     let primary = camera.sample_primary(x, y, rng);
@@ -71,7 +117,8 @@ pub fn trace_camera_path<S: SpectralMode>(
             {
                 let value =
                     path.throughput * view(&path.slots, scene.emission::<S>(index, w, emitted.radiance)) * weight;
-                out.add(Family::EmitterHit, value.to_rgb(w));
+                // The environment is the camera sub-path's last vertex.
+                out.record(Family::EmitterHit, 0, path.path_length + 1, value.to_rgb(w));
             }
             break;
         };
@@ -79,6 +126,8 @@ pub fn trace_camera_path<S: SpectralMode>(
         let cos_fixed = hit.normal.dot(-direction).abs();
         let distance_squared = path.arrival_distance_squared(hit.distance);
         path.mis.arrive(distance_squared, cos_fixed);
+        // Camera sub-path vertices up to this hit.
+        let t = path.path_length + 1;
 
         // Emitter hit (s = 0).
         if let Some(light_index) = hit.light
@@ -90,7 +139,7 @@ pub fn trace_camera_path<S: SpectralMode>(
         {
             let value =
                 path.throughput * view(&path.slots, scene.emission::<S>(light_index, w, emitted.radiance)) * weight;
-            out.add(Family::EmitterHit, value.to_rgb(w));
+            out.record(Family::EmitterHit, 0, t, value.to_rgb(w));
         }
         let Some(bsdf) =
             Bsdf::new_at(scene.material(&hit), &hit.shading_point(), -direction, TransportMode::Radiance, hero)
@@ -107,20 +156,20 @@ pub fn trace_camera_path<S: SpectralMode>(
         if !bsdf.is_delta() {
             if techniques.connect {
                 // Next-event estimation (s = 1).
-                out.add(Family::NextEvent, next_event(scene, &path, &end, rng, k, w).to_rgb(w));
+                out.record(Family::NextEvent, 1, t, next_event(scene, &path, &end, rng, k, w).to_rgb(w));
                 // Connections to the pixel's light sub-path (s, t > 1), stored in path order.
                 for light in light_path {
                     if light.path_length + 1 + path.path_length > it.max_length {
                         break;
                     }
                     let value = connect_vertices(scene, &path, &end, light, it.rebase(), k, w, rng);
-                    out.add(Family::Connection, value.to_rgb(w));
+                    out.record(Family::Connection, light.path_length + 1, t, value.to_rgb(w));
                 }
             }
             if let Some(source) = merge_source {
                 let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
-                let merged = merge(&path, &end, source, radius, it.max_length, weighting, k, w, rng);
-                out.add(Family::Merging, merged.to_rgb(w));
+                let merged = merge(&path, &end, source, radius, it.max_length, weighting, k, w, rng, out);
+                out.record(Family::Merging, 0, t, merged.to_rgb(w));
                 // Photon mapping stops at the first non-specular vertex; through a mixed
                 // vertex it continues along the specular lobes only.
                 if techniques.ppm {
@@ -135,7 +184,6 @@ pub fn trace_camera_path<S: SpectralMode>(
             break;
         }
     }
-    out
 }
 
 /// MIS weight of an emitter hit, or `None` when the enabled techniques do not count it.

@@ -20,6 +20,9 @@ pub struct Splat {
     /// Contribution (already divided by the number of light sub-paths; for
     /// [`SplatTarget::Pixel`] already multiplied by the filter value).
     pub value: Rgb,
+    /// Vertices of the light sub-path, the connected one included: the `s` of the t = 1
+    /// technique, for per-(s, t) images.
+    pub s: u32,
 }
 
 /// Where a light-tracing contribution is added.
@@ -76,13 +79,14 @@ pub fn connect_to_camera<S: SpectralMode>(
             1.0
         }
     };
+    let s = light.path_length + 1;
     let start = splats.len();
     if camera.filter.is_box() {
         let Some((pixel, _)) = camera.filter_pixels(connection.raster).next() else { return };
         let k = &it.pixel_constants(pixel as usize);
         let value = unweighted * (weight_for(k) * camera_pdf_a / k.light_path_count);
         if !value.is_black() {
-            splats.push(Splat { target: SplatTarget::Pixel(pixel), value });
+            splats.push(Splat { target: SplatTarget::Pixel(pixel), value, s });
         }
     } else if it.rebase() && weighted {
         // Every pixel weighs the path with its own radius.
@@ -90,14 +94,14 @@ pub fn connect_to_camera<S: SpectralMode>(
             let k = &it.pixel_constants(pixel as usize);
             let value = unweighted * (weight_for(k) * camera_pdf_a * filter / k.light_path_count);
             if !value.is_black() {
-                splats.push(Splat { target: SplatTarget::Pixel(pixel), value });
+                splats.push(Splat { target: SplatTarget::Pixel(pixel), value, s });
             }
         }
     } else {
         let k = &it.constants;
         let value = unweighted * (weight_for(k) * camera_pdf_a / k.light_path_count);
         if !value.is_black() {
-            splats.push(Splat { target: SplatTarget::Filtered(connection.raster), value });
+            splats.push(Splat { target: SplatTarget::Filtered(connection.raster), value, s });
         }
     }
     if splats.len() > start && scene.occluded(position, connection.direction, connection.distance) {

@@ -9,6 +9,7 @@ use super::connect::CameraEnd;
 use super::light_vertex::MergeVertex;
 use super::mis::{self, MisConstants};
 use super::subpath::SubPath;
+use super::technique_images::Record;
 use crate::fluorescent::view;
 use crate::hash_grid::HashGrid;
 use math::Rng;
@@ -35,9 +36,11 @@ pub struct MergeSource<'a, S: SpectralMode = Rgb> {
 }
 
 /// The merged contribution at camera vertex `position` within `radius` (throughput and kernel
-/// normalisation included).
+/// normalisation included). When `out` wants per-(s, t) values ([`Record::PER_TECHNIQUE`]),
+/// each merged light vertex's part is also staged there (s = its light sub-path vertices, the
+/// merged one included; t = the camera sub-path's vertices); the caller records the sum.
 #[allow(clippy::too_many_arguments)]
-pub fn merge<S: SpectralMode>(
+pub fn merge<S: SpectralMode, R: Record>(
     camera: &SubPath<S>,
     end: &CameraEnd,
     source: &MergeSource<S>,
@@ -47,6 +50,7 @@ pub fn merge<S: SpectralMode>(
     k: &MisConstants,
     wavelengths: &S::Wavelengths,
     rng: &mut Rng,
+    out: &mut R,
 ) -> S {
     let (bsdf, position): (&Bsdf, Vec3) = (end.bsdf, end.position);
     // One label for the camera vertex, shared by all its merges.
@@ -76,7 +80,13 @@ pub fn merge<S: SpectralMode>(
             None => S::from_reflectance(wavelengths, eval.value) * light.throughput,
             Some((f, label)) => f.apply_slots(wavelengths, label, eval.value, light.throughput),
         };
-        sum += scattered * weight;
+        let part = scattered * weight;
+        sum += part;
+        if R::PER_TECHNIQUE {
+            let t = camera.path_length + 1;
+            let value = camera.throughput * view(&camera.slots, part) * k.vm_normalization;
+            out.stage_merge(light.path_length + 1, t, value.to_rgb(wavelengths));
+        }
     });
     camera.throughput * view(&camera.slots, sum) * k.vm_normalization
 }

@@ -30,6 +30,10 @@
 //! image sees many wavelengths per iteration. Light tracing splats and camera paths convert
 //! their estimates to linear sRGB as they are made ([`SpectralMode::to_rgb`]), so the film, the
 //! technique images and the NaN counting are the same in both modes.
+//!
+//! On request the engine also files every contribution by family ([`Family`]) and by its
+//! (s, t) technique ([`technique_images`], which states the conventions); the frame is the same
+//! bit for bit with and without recording.
 
 pub mod camera_pass;
 pub mod connect;
@@ -39,6 +43,7 @@ pub mod memory;
 pub mod merge;
 pub mod mis;
 pub mod subpath;
+pub mod technique_images;
 
 use math::{Rng, Vec2};
 use rayon::prelude::*;
@@ -46,12 +51,13 @@ use scene::{FrameBuffer, Scene};
 use spectrum::{Hero4, Rgb, SpectralMode};
 
 use crate::hash_grid::HashGrid;
-use camera_pass::trace_camera_path;
+use camera_pass::trace_camera_path_recorded;
 use connect::{Splat, SplatTarget};
 use light_pass::trace_light_path;
 use light_vertex::{LightVertex, LightVertexStore, MergeVertex};
 use merge::MergeSource;
 use mis::MisConstants;
+use technique_images::{TechniqueFrame, TechniqueLayout, TechniqueValues};
 
 /// The algorithms of the VCM engine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -158,13 +164,15 @@ impl FamilyValues {
     }
 
     /// Zeroes the values when their sum is not finite (finite values that overflow together),
-    /// counting the estimate against the family with the largest value.
-    fn discard_overflow(&mut self) {
-        if !self.total().is_finite() {
-            let largest = (0..5).max_by(|a, b| self.0[*a].max_component().total_cmp(&self.0[*b].max_component()));
-            self.0 = [Rgb::BLACK; 5];
-            self.1[largest.unwrap_or(0)] += 1;
+    /// counting the estimate against the family with the largest value. Returns whether it did.
+    fn discard_overflow(&mut self) -> bool {
+        if self.total().is_finite() {
+            return false;
         }
+        let largest = (0..5).max_by(|a, b| self.0[*a].max_component().total_cmp(&self.0[*b].max_component()));
+        self.0 = [Rgb::BLACK; 5];
+        self.1[largest.unwrap_or(0)] += 1;
+        true
     }
 
     /// Adds this estimate's discarded counts to `counts`.
@@ -378,6 +386,25 @@ impl VcmEngine {
         }
     }
 
+    /// Keeps the per-pixel contributions of every (s, t) technique of each iteration, laid out
+    /// as `layout` says (`None`: off, the default). See [`VcmEngine::technique_frame`].
+    pub fn record_techniques(&mut self, layout: Option<TechniqueLayout>) {
+        let frame = layout.map(|layout| TechniqueFrame::new(layout, 0));
+        match &mut self.kind {
+            EngineKind::Rgb(e) => e.technique_frame = frame,
+            EngineKind::Spectral(e) => e.technique_frame = frame,
+        }
+    }
+
+    /// Per-pixel contributions of the last iteration by (s, t) technique (light tracing
+    /// included), if recording is on. They sum to the iteration's frame up to float rounding.
+    pub fn technique_frame(&self) -> Option<&TechniqueFrame> {
+        match &self.kind {
+            EngineKind::Rgb(e) => e.technique_frame.as_ref(),
+            EngineKind::Spectral(e) => e.technique_frame.as_ref(),
+        }
+    }
+
     /// Statistics of the last iteration.
     pub fn stats(&self) -> IterationStats {
         match &self.kind {
@@ -417,6 +444,8 @@ struct Engine<S: SpectralMode> {
     grid: HashGrid,
     /// Per-pixel contributions by family of the last iteration, when requested.
     family_frames: Option<Vec<FamilyValues>>,
+    /// Per-pixel contributions by (s, t) technique of the last iteration, when requested.
+    technique_frame: Option<TechniqueFrame>,
     stats: IterationStats,
     /// The memory-efficient mode has light vertices to merge with.
     merge_seeded: bool,
@@ -445,6 +474,7 @@ impl<S: SpectralMode> Engine<S> {
             merge_vertices: Vec::new(),
             grid: HashGrid::new(),
             family_frames: None,
+            technique_frame: None,
             stats: IterationStats::default(),
             merge_seeded: false,
         }
@@ -521,21 +551,25 @@ impl<S: SpectralMode> Engine<S> {
         let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: it.rebase() };
         let merge_source = it.techniques.merge.then_some(source);
         let width = frame.width as usize;
-        let mut rejected = render_pixels(frame, self.family_frames.as_mut(), |index| {
-            if it.techniques.light_trace_only {
-                return FamilyValues::default();
-            }
-            let mut rng = Rng::for_stream(seed, iteration, index as u64);
-            let (x, y) = ((index % width) as u32, (index / width) as u32);
-            let wavelengths = wavelengths_for::<S>(shared, scene, seed, iteration, index as u64);
-            trace_camera_path(scene, it, x, y, &mut rng, store.path(index), merge_source.as_ref(), &wavelengths)
-        });
+        let mut rejected =
+            render_pixels(frame, self.family_frames.as_mut(), self.technique_frame.as_mut(), |index, techniques| {
+                if it.techniques.light_trace_only {
+                    return FamilyValues::default();
+                }
+                let mut rng = Rng::for_stream(seed, iteration, index as u64);
+                let (x, y) = ((index % width) as u32, (index / width) as u32);
+                let light_path = store.path(index);
+                let wavelengths = wavelengths_for::<S>(shared, scene, seed, iteration, index as u64);
+                let merge = merge_source.as_ref();
+                trace_camera_path_recorded(scene, it, x, y, &mut rng, light_path, merge, &wavelengths, techniques)
+            });
         let camera_pass = start.elapsed() - light_pass - grid_build;
         let splats = chunks.iter().map(|c| c.2.len()).sum();
         apply_splats(
             frame,
             &scene.camera,
             self.family_frames.as_mut(),
+            self.technique_frame.as_mut(),
             chunks.iter().map(|c| c.2.as_slice()),
             &mut rejected,
         );
@@ -577,15 +611,27 @@ impl<S: SpectralMode> Engine<S> {
         let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: true };
         let merge_source = it.techniques.merge.then_some(source);
         let family_frames = self.family_frames.as_mut();
+        let layout = self.technique_frame.as_ref().map(|t| t.layout);
+        let images = layout.map_or(0, |l| l.len());
+        if let Some(techniques) = &mut self.technique_frame {
+            techniques.clear(pixel_count);
+        }
+        // Row chunks of the technique values (none when not recorded).
+        let mut technique_rows: Vec<&mut [Rgb]> = match &mut self.technique_frame {
+            Some(techniques) => techniques.values.chunks_mut(width * images).collect(),
+            None => frame.pixels.chunks(width).map(|_| <&mut [Rgb]>::default()).collect(),
+        };
         let rows: Vec<RowResult<S>> = frame
             .pixels
             .par_chunks_mut(width)
+            .zip(technique_rows.par_iter_mut())
             .enumerate()
-            .map(|(row, pixels)| {
+            .map(|(row, (pixels, technique_row))| {
                 let mut vertices = Vec::new();
                 let mut splats = Vec::new();
                 let mut families = Vec::new();
                 let mut rejected = RejectedCounts::default();
+                let mut stage = vec![Rgb::BLACK; images];
                 for (column, pixel) in pixels.iter_mut().enumerate() {
                     let index = row * width + column;
                     let start = vertices.len();
@@ -594,7 +640,11 @@ impl<S: SpectralMode> Engine<S> {
                     trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &wavelengths);
                     let mut rng = Rng::for_stream(seed, iteration, index as u64);
                     let light_path = &vertices[start..];
-                    let mut values = trace_camera_path(
+                    let techniques = layout.map(|layout| {
+                        let pixel_images = &mut technique_row[column * images..(column + 1) * images];
+                        TechniqueValues::new(layout, pixel_images, &mut stage)
+                    });
+                    let mut values = trace_camera_path_recorded(
                         scene,
                         it,
                         column as u32,
@@ -603,6 +653,7 @@ impl<S: SpectralMode> Engine<S> {
                         light_path,
                         merge_source.as_ref(),
                         &wavelengths,
+                        techniques,
                     );
                     values.discard_overflow();
                     values.count_rejected(&mut rejected);
@@ -631,6 +682,7 @@ impl<S: SpectralMode> Engine<S> {
             frame,
             &scene.camera,
             self.family_frames.as_mut(),
+            self.technique_frame.as_mut(),
             rows.iter().map(|r| r.1.as_slice()),
             &mut rejected,
         );
@@ -689,54 +741,64 @@ fn trace_light_chunks<S: SpectralMode>(
         .collect()
 }
 
-/// Fills `frame` (and the family frames, if recorded) with `trace(pixel)` for every pixel, in
-/// parallel over rows. Returns the number of rejected (non-finite) pixel estimates.
+/// Fills `frame` (and the family and technique frames, if recorded) with `trace(pixel,
+/// techniques)` for every pixel, in parallel over rows; `techniques` is where the pixel's
+/// (s, t) values go when recorded. Returns the number of rejected (non-finite) pixel estimates.
 fn render_pixels(
     frame: &mut FrameBuffer,
     family_frames: Option<&mut Vec<FamilyValues>>,
-    trace: impl Fn(usize) -> FamilyValues + Sync,
+    technique_frame: Option<&mut TechniqueFrame>,
+    trace: impl Fn(usize, Option<TechniqueValues>) -> FamilyValues + Sync,
 ) -> RejectedCounts {
     let width = frame.width as usize;
     let pixel_count = frame.pixels.len();
-    let evaluate = |index: usize, rejected: &mut RejectedCounts| {
-        let mut values = trace(index);
-        values.discard_overflow();
-        values.count_rejected(rejected);
-        values
-    };
-    let sum = |a: RejectedCounts, b: RejectedCounts| std::array::from_fn(|i| a[i] + b[i]);
-    match family_frames {
-        None => frame
-            .pixels
-            .par_chunks_mut(width)
-            .enumerate()
-            .map(|(row, pixels)| {
-                let mut rejected = RejectedCounts::default();
-                for (column, pixel) in pixels.iter_mut().enumerate() {
-                    *pixel = evaluate(row * width + column, &mut rejected).total();
-                }
-                rejected
-            })
-            .reduce(RejectedCounts::default, sum),
+    let rows = pixel_count.div_ceil(width.max(1));
+    // Per-row slices of the optional buffers (empty when not recorded).
+    let mut family_rows: Vec<&mut [FamilyValues]> = match family_frames {
         Some(families) => {
             families.clear();
             families.resize(pixel_count, FamilyValues::default());
-            frame
-                .pixels
-                .par_chunks_mut(width)
-                .zip(families.par_chunks_mut(width))
-                .enumerate()
-                .map(|(row, (pixels, family_row))| {
-                    let mut rejected = RejectedCounts::default();
-                    for (column, (pixel, family)) in pixels.iter_mut().zip(family_row).enumerate() {
-                        *family = evaluate(row * width + column, &mut rejected);
-                        *pixel = family.total();
-                    }
-                    rejected
-                })
-                .reduce(RejectedCounts::default, sum)
+            families.chunks_mut(width).collect()
         }
-    }
+        None => (0..rows).map(|_| <&mut [FamilyValues]>::default()).collect(),
+    };
+    let (layout, images) = match &technique_frame {
+        Some(t) => (Some(t.layout), t.layout.len()),
+        None => (None, 0),
+    };
+    let mut technique_rows: Vec<&mut [Rgb]> = match technique_frame {
+        Some(techniques) => {
+            techniques.clear(pixel_count);
+            techniques.values.chunks_mut(width * images).collect()
+        }
+        None => (0..rows).map(|_| <&mut [Rgb]>::default()).collect(),
+    };
+    let sum = |a: RejectedCounts, b: RejectedCounts| std::array::from_fn(|i| a[i] + b[i]);
+    frame
+        .pixels
+        .par_chunks_mut(width)
+        .zip(family_rows.par_iter_mut())
+        .zip(technique_rows.par_iter_mut())
+        .enumerate()
+        .map(|(row, ((pixels, family_row), technique_row))| {
+            let mut rejected = RejectedCounts::default();
+            let mut stage = vec![Rgb::BLACK; images];
+            for (column, pixel) in pixels.iter_mut().enumerate() {
+                let techniques = layout.map(|layout| {
+                    let pixel_images = &mut technique_row[column * images..(column + 1) * images];
+                    TechniqueValues::new(layout, pixel_images, &mut stage)
+                });
+                let mut values = trace(row * width + column, techniques);
+                values.discard_overflow();
+                values.count_rejected(&mut rejected);
+                *pixel = values.total();
+                if let Some(family) = family_row.get_mut(column) {
+                    *family = values;
+                }
+            }
+            rejected
+        })
+        .reduce(RejectedCounts::default, sum)
 }
 
 /// Adds light-tracing splats to the frame in the given (light sub-path) order: a pixel splat
@@ -746,13 +808,17 @@ fn apply_splats<'s>(
     frame: &mut FrameBuffer,
     camera: &scene::Camera,
     mut family_frames: Option<&mut Vec<FamilyValues>>,
+    mut technique_frame: Option<&mut TechniqueFrame>,
     splats: impl Iterator<Item = &'s [Splat]>,
     rejected: &mut RejectedCounts,
 ) {
-    let mut add = |pixel: u32, value: Rgb| {
+    let mut add = |pixel: u32, s: u32, value: Rgb| {
         frame.pixels[pixel as usize] += value;
         if let Some(families) = family_frames.as_deref_mut() {
             families[pixel as usize].add(Family::LightTracing, value);
+        }
+        if let Some(techniques) = technique_frame.as_deref_mut() {
+            techniques.add_splat(pixel as usize, s, value);
         }
     };
     for splat in splats.flatten() {
@@ -763,10 +829,10 @@ fn apply_splats<'s>(
             Rgb::BLACK
         };
         match splat.target {
-            SplatTarget::Pixel(pixel) => add(pixel, value),
+            SplatTarget::Pixel(pixel) => add(pixel, splat.s, value),
             SplatTarget::Filtered(raster) => {
                 for (pixel, filter) in camera.filter_pixels(raster) {
-                    add(pixel, value * filter);
+                    add(pixel, splat.s, value * filter);
                 }
             }
         }
