@@ -559,9 +559,10 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
         _ => String::new(),
     };
     eprintln!(
-        "{interrupted_note}{} with {} at {}x{}: {} iterations{resumed_note} in {:.2} s ({:.1} ms/iteration, {} threads{vertices}), {} rejected samples{rejected_note} -> {}",
+        "{interrupted_note}{} with {}{} at {}x{}: {} iterations{resumed_note} in {:.2} s ({:.1} ms/iteration, {} threads{vertices}), {} rejected samples{rejected_note} -> {}",
         scene.name,
         algorithm.name(),
+        if settings.spectral { " (spectral)" } else { "" },
         film.width(),
         film.height(),
         iterations,

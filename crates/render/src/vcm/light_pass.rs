@@ -66,7 +66,7 @@ pub fn trace_light_path<S: SpectralMode>(
                     position: hit.position,
                     throughput: path.throughput,
                     mis: path.mis,
-                    path_length: path.path_length,
+                    path_length: path.path_length.min(u32::from(u16::MAX)) as u16,
                     material: hit.material,
                     normal: hit.normal,
                     shading_normal: hit.shading_normal,

@@ -9,7 +9,7 @@ use spectrum::{Rgb, SpectralMode};
 
 use super::mis::SubPathMis;
 
-/// A stored light sub-path vertex (100 bytes in RGB mode).
+/// A stored light sub-path vertex (100 bytes in RGB mode, 104 in spectral mode).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightVertex<S: SpectralMode = Rgb> {
     /// Position on the surface.
@@ -19,8 +19,9 @@ pub struct LightVertex<S: SpectralMode = Rgb> {
     pub throughput: S,
     /// MIS quantities at this vertex.
     pub mis: SubPathMis,
-    /// Segments from the light to this vertex.
-    pub path_length: u32,
+    /// Segments from the light to this vertex (`u16` keeps the vertex at 100 bytes and the
+    /// merging data at 64 with the termination flag; light sub-paths end long before).
+    pub path_length: u16,
     /// Material index, to rebuild the BSDF.
     pub material: u32,
     /// Geometric normal.
@@ -98,8 +99,9 @@ pub struct MergeVertex<S: SpectralMode = Rgb> {
     pub throughput: S,
     /// MIS quantities at this vertex.
     pub mis: SubPathMis,
-    /// Segments from the light to this vertex.
-    pub path_length: u32,
+    /// Segments from the light to this vertex (`u16` keeps the vertex at 100 bytes and the
+    /// merging data at 64 with the termination flag; light sub-paths end long before).
+    pub path_length: u16,
     /// Russian-roulette continuation probability of the vertex's BSDF.
     pub continuation: f32,
     /// The light sub-path kept only its hero wavelength.
@@ -117,5 +119,20 @@ impl<S: SpectralMode> From<&LightVertex<S>> for MergeVertex<S> {
             continuation: v.continuation,
             terminated: v.terminated,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spectrum::Hero4;
+
+    #[test]
+    fn stored_vertices_keep_their_sizes() {
+        // The memory estimates and the documentation quote these sizes.
+        assert_eq!(std::mem::size_of::<LightVertex<Rgb>>(), 100);
+        assert_eq!(std::mem::size_of::<MergeVertex<Rgb>>(), 64);
+        assert_eq!(std::mem::size_of::<LightVertex<Hero4>>(), 104);
+        assert_eq!(std::mem::size_of::<MergeVertex<Hero4>>(), 68);
     }
 }

@@ -60,7 +60,7 @@ pub fn merge<S: SpectralMode, R: Record>(
     source.grid.for_each_slot_within(position, radius, |slot| {
         let light = &source.vertices[slot];
         // A merged path is one segment shorter than a connected one.
-        if light.path_length + camera.path_length > max_length {
+        if u32::from(light.path_length) + camera.path_length > max_length {
             return;
         }
         let Some(eval) = bsdf.evaluate(light.fixed) else { return };
@@ -85,7 +85,7 @@ pub fn merge<S: SpectralMode, R: Record>(
         if R::PER_TECHNIQUE {
             let t = camera.path_length + 1;
             let value = camera.throughput * view(&camera.slots, part) * k.vm_normalization;
-            out.stage_merge(light.path_length + 1, t, value.to_rgb(wavelengths));
+            out.stage_merge(u32::from(light.path_length) + 1, t, value.to_rgb(wavelengths));
         }
     });
     camera.throughput * view(&camera.slots, sum) * k.vm_normalization
