@@ -356,6 +356,20 @@ fn check_writable(path: &Path) -> Result<()> {
 /// Set by the first Ctrl-C / SIGTERM: finish the current iteration, write the images, stop.
 static STOP: AtomicBool = AtomicBool::new(false);
 
+/// First Ctrl-C / SIGTERM sets [`STOP`] (the work in progress finishes its iteration and writes
+/// what it has); a second one exits at once.
+fn install_interrupt_handler() {
+    let handler = ctrlc::set_handler(|| {
+        if STOP.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupted: finishing the current iteration (press Ctrl-C again to quit at once)");
+    });
+    if let Err(error) = handler {
+        eprintln!("warning: cannot install the Ctrl-C handler ({error}); an interrupt will lose the work");
+    }
+}
+
 fn run_render(mut args: RenderArgs) -> Result<()> {
     // A resumed render takes its settings from the checkpoint.
     let resumed = match &args.resume {
@@ -483,16 +497,7 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
         memory_efficient: args.memory_efficient,
         spectral: args.spectral,
     };
-    // First Ctrl-C / SIGTERM: stop after the current iteration; a second one: exit at once.
-    let handler = ctrlc::set_handler(|| {
-        if STOP.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-        eprintln!("\ninterrupted: finishing the current iteration (press Ctrl-C again to quit at once)");
-    });
-    if let Err(error) = handler {
-        eprintln!("warning: cannot install the Ctrl-C handler ({error}); an interrupt will lose the render");
-    }
+    install_interrupt_handler();
     let resumed_iterations = resumed.as_ref().map(|f| f.iterations());
     let checkpoint_path = args.checkpoint.clone();
     let save = move |film: &scene::Film| {

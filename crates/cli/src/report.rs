@@ -269,6 +269,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
     crate::check_writable(&out.join("report.json"))?;
 
     let options = io::WriteOptions { exposure_stops: args.exposure };
+    crate::install_interrupt_handler();
     let total = entries.len() * algorithms.len();
     let mut done = 0;
     let mut reports: Vec<SceneReport> = Vec::new();
@@ -300,7 +301,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
                 threads: args.threads,
                 ..RenderSettings::default()
             };
-            let (film, seconds, convergence) =
+            let (film, seconds, convergence, interrupted) =
                 render_combination(scene, &settings, budget, reference.as_ref().map(|r| &r.image))?;
             let image = io::Image { width: width as usize, height: height as usize, pixels: film.mean() };
             let stem = format!("{}/{}", entry.label, algorithm.name());
@@ -329,6 +330,9 @@ pub fn run(args: ReportArgs) -> Result<()> {
                 result.ms_per_iteration()
             );
             results.push(result);
+            if interrupted {
+                break;
+            }
         }
         let plot = if reference.is_some() {
             let file = format!("{}/convergence.svg", entry.label);
@@ -351,20 +355,28 @@ pub fn run(args: ReportArgs) -> Result<()> {
         });
         // Keep the page current, so an interrupted report still shows the finished scenes.
         html::write_outputs(out, &reports, budget, &args.reference, args.seed)?;
+        if crate::STOP.load(std::sync::atomic::Ordering::Relaxed) {
+            eprintln!(
+                "interrupted: the report has {done} of {total} combinations (the last one stopped early: its \
+                 iteration count is on the page)"
+            );
+            break;
+        }
     }
     eprintln!("report: {}", out.join("index.html").display());
     Ok(())
 }
 
-/// Renders one combination until `budget` is used up; with a reference, measures the error of
-/// the running image after iterations 1, 2, 4, … and after the last one. Returns the film,
-/// the render time in seconds and the measurements.
+/// Renders one combination until `budget` is used up or Ctrl-C ([`crate::STOP`]); with a
+/// reference, measures the error of the running image after iterations 1, 2, 4, … and after the
+/// last one. Returns the film, the render time in seconds, the measurements and whether it was
+/// interrupted.
 fn render_combination(
     scene: &scene::Scene,
     settings: &RenderSettings,
     budget: ReportBudget,
     reference: Option<&io::Image>,
-) -> Result<(Film, f64, Vec<ErrorPoint>)> {
+) -> Result<(Film, f64, Vec<ErrorPoint>, bool)> {
     let mut renderer = Renderer::new(scene, settings).map_err(anyhow::Error::msg)?;
     let mut film = Film::new(scene.camera.width, scene.camera.height);
     let mut elapsed = Duration::ZERO;
@@ -375,10 +387,12 @@ fn render_combination(
         film.add_iteration(renderer.frame(), rejected);
         elapsed += start.elapsed();
         let iterations = film.iterations();
-        let finished = match budget {
-            ReportBudget::Time(limit) => elapsed >= limit,
-            ReportBudget::Iterations(n) => iterations >= n,
-        };
+        let interrupted = crate::STOP.load(std::sync::atomic::Ordering::Relaxed);
+        let finished = interrupted
+            || match budget {
+                ReportBudget::Time(limit) => elapsed >= limit,
+                ReportBudget::Iterations(n) => iterations >= n,
+            };
         if let Some(reference) = reference
             && (iterations.is_power_of_two() || finished)
         {
@@ -393,7 +407,7 @@ fn render_combination(
             });
         }
         if finished {
-            return Ok((film, elapsed.as_secs_f64(), convergence));
+            return Ok((film, elapsed.as_secs_f64(), convergence, interrupted));
         }
     }
 }

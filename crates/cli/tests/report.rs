@@ -287,3 +287,33 @@ fn bad_arguments_fail_with_exit_code_2() {
         &["cannot create the output directory", path(&below)],
     );
 }
+
+#[test]
+fn sigint_finishes_the_running_combination_and_writes_the_page() {
+    let dir = temp_dir("sigint");
+    let out = dir.join("report");
+    // Two scenes of 60 s per algorithm: only an interrupt ends this quickly.
+    let child = Command::new(env!("CARGO_BIN_EXE_vcm"))
+        .args(["report", "--scenes", "1,3", "--algorithms", "pt,vcm", "--time", "60", "-r", "24x24", "-o"])
+        .arg(&out)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+    let start = std::time::Instant::now();
+    let output = child.wait_with_output().unwrap();
+    assert!(start.elapsed().as_secs() < 30, "the report stopped within an iteration, not at its budget");
+    let message = stderr(&output);
+    assert!(output.status.success(), "an interrupted report exits cleanly: {message}");
+    assert!(message.contains("interrupted: the report has 1 of 4 combinations"), "{message}");
+    // The page shows the combination that ran, with the images it links.
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    let linked = links(&html);
+    assert!(linked.iter().any(|l| l == "cornell-area-mirror/pt.png"), "{linked:?}");
+    assert!(!linked.iter().any(|l| l.contains("vcm.png")), "{linked:?}");
+    for link in &linked {
+        assert!(out.join(link).is_file(), "index.html links {link}, which does not exist");
+    }
+}
