@@ -587,6 +587,8 @@ fn write_technique_images(dir: &Path, families: &[scene::Film; 5], options: &io:
     for (family, pixels) in Family::ALL.iter().zip(&means) {
         let image = io::Image { width, height, pixels: pixels.clone() };
         io::write_image(&dir.join(format!("{}.exr", family.name())), &image, options)?;
+        // A preview to browse, exposed like the render's.
+        io::write_image(&dir.join(format!("{}.png", family.name())), &image, options)?;
     }
     // Share of vertex merging against all connection techniques, by luminance.
     let luminance = |p: [f32; 3]| spectrum::Rgb::from_array(p).luminance().max(0.0);

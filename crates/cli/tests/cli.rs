@@ -195,7 +195,7 @@ fn technique_images_sum_to_the_image() {
                 assert!((s[c] - p[c] as f64).abs() <= tolerance, "scene {scene}: families sum to {} vs {}", s[c], p[c]);
             }
         }
-        assert!(techniques.join("vc-vm-share.png").exists());
+        assert!(techniques.join("vc-vm-share.png").exists() && techniques.join("merging.png").exists());
         // The per-(s, t) images up to the default length 4 (13 connection-type, 6 merges, 5
         // longer buckets) sum to the image too.
         let mut st_images: Vec<String> = std::fs::read_dir(&techniques)
