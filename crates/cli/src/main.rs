@@ -313,6 +313,15 @@ fn memory_guard(scene: &Scene, settings: &render::vcm::VcmSettings, args: &Rende
         estimate.vertices_per_path,
         format_size(estimate.two_stage_bytes)
     );
+    if settings.spectral && render::vcm::Techniques::of(settings.algorithm).merge {
+        bail!(
+            "{need}, more than --max-memory {}; spectral mode cannot switch to --memory-efficient with {} \
+             (its merges would pair different wavelengths): lower the resolution or --max-length, or raise \
+             --max-memory",
+            format_size(limit),
+            Algorithm::Vcm(settings.algorithm).name()
+        );
+    }
     if estimate.memory_efficient_bytes <= limit {
         eprintln!(
             "note: {need}, more than --max-memory {}; switching to --memory-efficient (about {})",
