@@ -43,11 +43,12 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use scene::Texture;
-use scene::desc::{CameraDesc, FilmDesc, LightDesc, SceneDescription, ShapeDesc, TextureImage};
+use scene::desc::{CameraDesc, EmissionSpectra, FilmDesc, LightDesc, SceneDescription, ShapeDesc, TextureImage};
 use scene::material::Material;
 use spectrum::Rgb;
 
 use crate::scene_error::SceneError;
+use emitter::AreaEmission;
 use xml::Node;
 
 pub use colour_api::*;
@@ -90,8 +91,8 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDescriptio
 pub(crate) enum Resolved {
     Bsdf(Material),
     Texture(Texture),
-    /// An area emitter's radiance.
-    AreaEmitter(Rgb),
+    /// An area emitter's radiance (and spectrum).
+    AreaEmitter(AreaEmission),
     /// Any other object (named by its tag) that cannot be referenced here.
     Other(String),
 }
@@ -118,6 +119,7 @@ pub(crate) struct Loader<'a> {
     default_material: Option<u32>,
     shapes: Vec<ShapeDesc>,
     lights: Vec<LightDesc>,
+    emission_spectra: EmissionSpectra,
     attached_emitters: HashSet<String>,
     images: HashMap<(PathBuf, bool), Arc<TextureImage>>,
     camera: Option<(CameraDesc, FilmDesc)>,
@@ -138,6 +140,7 @@ impl<'a> Loader<'a> {
             default_material: None,
             shapes: Vec::new(),
             lights: Vec::new(),
+            emission_spectra: EmissionSpectra::default(),
             attached_emitters: HashSet::new(),
             images: HashMap::new(),
             camera: None,
@@ -332,6 +335,7 @@ impl<'a> Loader<'a> {
             lights: self.lights,
             max_path_length: self.max_path_length,
             warnings: self.warnings,
+            emission_spectra: self.emission_spectra,
         })
     }
 }
