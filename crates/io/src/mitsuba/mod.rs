@@ -20,7 +20,10 @@
 //!   takes the normal from the transformed triangle, so there a mirrored emitter would emit to
 //!   the other side in Mitsuba;
 //! - `max_depth` counts path segments (−1 = unlimited);
-//! - spectra become linear sRGB as in Mitsuba's RGB variants (`colour`);
+//! - spectra become linear sRGB as in Mitsuba's RGB variants (`colour`); emitters given by a
+//!   tabulated, constant or blackbody spectrum also keep it
+//!   ([`SceneDescription::emission_spectra`]) for spectral rendering;
+//! - `<bsdf type="fluorescent">` is our extension (see `bsdf.rs`);
 //! - Beckmann microfacet distributions (Mitsuba's default for the rough plugins) are
 //!   approximated by GGX with the same `alpha`, with a warning.
 //!
