@@ -1,10 +1,11 @@
 //! Turning a [`SceneDescription`] (what a file loader produces) into a renderable [`Scene`].
 
 use crate::camera::Camera;
-use crate::desc::{Geometry, LightDesc, MeshData, SceneDescription};
+use crate::desc::{EmissionSpectrum, Geometry, LightDesc, MeshData, SceneDescription};
 use crate::filter::Filter;
 use crate::light::{AreaLight, Light};
-use crate::scene::{Primitive, Scene, SurfaceAttributes};
+use crate::material::Material;
+use crate::scene::{LightSpectrum, Primitive, Scene, SurfaceAttributes};
 use crate::shape::{Disk, Shape, Sphere, Triangle};
 
 /// What [`Scene::from_description`] built, for the user's summary line.
@@ -22,7 +23,10 @@ pub struct BuildReport {
 
 impl Scene {
     /// Builds the scene of a description, rendered at `resolution` (width, height) when given,
-    /// at the film's resolution otherwise. Errors name the shape or light at fault.
+    /// at the film's resolution otherwise. Errors name the shape or light at fault. Emission
+    /// spectra of [`SceneDescription::emission_spectra`] go to every light built from their
+    /// shape or light; fluorescent materials must not re-absorb fluorescent emission
+    /// ([`check_fluorescent_bands`]).
     pub fn from_description(
         desc: &SceneDescription,
         resolution: Option<(u32, u32)>,
@@ -34,11 +38,21 @@ impl Scene {
         for (index, material) in desc.materials.iter().enumerate() {
             material.validate().map_err(|e| format!("material {index}: {e}"))?;
         }
+        check_fluorescent_bands(&desc.materials)?;
+        let spectra = &desc.emission_spectra;
+        if let Some(&index) = spectra.shapes.keys().find(|&&i| i as usize >= desc.shapes.len()) {
+            return Err(format!("an emission spectrum refers to shape {index} of {}", desc.shapes.len()));
+        }
+        if let Some(&index) = spectra.lights.keys().find(|&&i| i as usize >= desc.lights.len()) {
+            return Err(format!("an emission spectrum refers to light {index} of {}", desc.lights.len()));
+        }
+        // Emission spectra per light, in light order.
+        let mut light_spectra: Vec<Option<LightSpectrum>> = Vec::new();
         let mut report = BuildReport::default();
         let mut primitives = Vec::new();
         let mut attributes = Vec::new();
         let mut lights = Vec::new();
-        for shape in &desc.shapes {
+        for (shape_index, shape) in desc.shapes.iter().enumerate() {
             if shape.material as usize >= desc.materials.len() {
                 return Err(format!(
                     "shape '{}' refers to material {} of {}",
@@ -53,6 +67,11 @@ impl Scene {
             {
                 return Err(format!("shape '{}' emits an invalid radiance {:?}", shape.name, e.to_array()));
             }
+            let spectrum = spectra.shapes.get(&(shape_index as u32));
+            if let Some(s) = spectrum {
+                s.validate().map_err(|e| format!("shape '{}': {e}", shape.name))?;
+            }
+            let spectrum = emission.zip(spectrum).map(|(base, s)| LightSpectrum { spectrum: s.clone(), base });
             match &shape.geometry {
                 Geometry::Mesh(mesh) => {
                     mesh.validate().map_err(|e| format!("mesh '{}': {e}", shape.name))?;
@@ -63,6 +82,7 @@ impl Scene {
                         };
                         let light = emission.map(|radiance| {
                             lights.push(Light::Area(AreaLight::new(triangle, radiance)));
+                            light_spectra.push(spectrum.clone());
                             lights.len() as u32 - 1
                         });
                         let mut primitive = Primitive::new(Shape::Triangle(triangle), shape.material, light);
@@ -83,6 +103,7 @@ impl Scene {
                             let light = AreaLight::sphere(*center, *radius, *flip_normals, radiance)
                                 .map_err(|e| format!("sphere '{}': {e}", shape.name))?;
                             lights.push(Light::Area(light));
+                            light_spectra.push(spectrum.clone());
                             Some(lights.len() as u32 - 1)
                         }
                         None => None,
@@ -107,6 +128,7 @@ impl Scene {
                             let light = AreaLight::disc(*center, *axis_u, *axis_v, *flip_normals, radiance)
                                 .map_err(|e| format!("disk '{}': {e}", shape.name))?;
                             lights.push(Light::Area(light));
+                            light_spectra.push(spectrum.clone());
                             Some(lights.len() as u32 - 1)
                         }
                         None => None,
@@ -122,6 +144,10 @@ impl Scene {
                 environments += 1;
             }
             lights.push(Light::from_desc(light).map_err(|e| format!("light {index}: {e}"))?);
+            light_spectra.push(match spectra.lights.get(&(index as u32)) {
+                Some(s) => Some(light_spectrum(light, s).map_err(|e| format!("light {index}: {e}"))?),
+                None => None,
+            });
         }
         if environments > 1 {
             return Err(format!("{environments} environment lights; at most one is supported"));
@@ -130,9 +156,44 @@ impl Scene {
         let filter = Filter::from_desc(&desc.film.filter)?;
         let camera = Camera::from_desc(&desc.camera, width, height)?.with_filter(filter);
         let scene = Scene::new(desc.name.clone(), primitives, desc.materials.clone(), lights, camera)
-            .with_attributes(attributes);
+            .with_attributes(attributes)
+            .with_light_spectra(if light_spectra.iter().any(Option::is_some) { light_spectra } else { Vec::new() });
         Ok((scene, report))
     }
+}
+
+/// The spectrum of a light that is not attached to a shape, with the light's RGB value as its
+/// base. Image environments vary over directions and cannot carry one spectrum.
+fn light_spectrum(light: &LightDesc, spectrum: &EmissionSpectrum) -> Result<LightSpectrum, String> {
+    spectrum.validate()?;
+    let base = match light {
+        LightDesc::Point { intensity, .. } | LightDesc::Spot { intensity, .. } => *intensity,
+        LightDesc::Directional { irradiance, .. } => *irradiance,
+        LightDesc::Constant { radiance } => *radiance,
+        LightDesc::EnvMap { .. } => return Err("an image environment cannot have an emission spectrum".into()),
+    };
+    Ok(LightSpectrum { spectrum: spectrum.clone(), base })
+}
+
+/// Fails when the emission band of a fluorescent material overlaps the absorption band of a
+/// fluorescent material (itself or another): light re-emitted by one could then be shifted
+/// again, which the integrators do not handle (a path has at most one wavelength shift).
+pub fn check_fluorescent_bands(materials: &[Material]) -> Result<(), String> {
+    let fluorescent: Vec<(usize, &spectrum::fluorescence::Fluorescence)> =
+        materials.iter().enumerate().filter_map(|(i, m)| m.fluorescence().map(|f| (i, f))).collect();
+    for &(i, emitter) in &fluorescent {
+        for &(j, absorber) in &fluorescent {
+            if emitter.emission.overlaps(&absorber.absorption) {
+                let (e0, e1) = emitter.emission.support();
+                let (a0, a1) = absorber.absorption.support();
+                return Err(format!(
+                    "material {i} re-emits at {e0:.0}–{e1:.0} nm, which overlaps the absorption band \
+                     {a0:.0}–{a1:.0} nm of fluorescent material {j}: light would be shifted twice"
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The triangles of a mesh (`None` for degenerate ones) with their vertex attributes. When the
@@ -186,6 +247,7 @@ mod tests {
             lights: Vec::new(),
             max_path_length: Some(5),
             warnings: Vec::new(),
+            emission_spectra: Default::default(),
         }
     }
 

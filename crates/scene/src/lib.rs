@@ -24,5 +24,5 @@ pub use light::{BoundingSphere, DirectSample, EmissionSample, HitRadiance, Light
 pub use material::{
     Bsdf, BsdfEval, BsdfSample, LobeKind, Material, PdfPair, ReferenceMaterial, ShadingPoint, TransportMode,
 };
-pub use scene::{Primitive, Scene, SurfaceHit};
+pub use scene::{LightSpectrum, Primitive, Scene, SurfaceHit};
 pub use texture::Texture;

@@ -5,6 +5,7 @@ use math::{Aabb, Distribution1D, RAY_EPSILON, Ray, Vec2, Vec3};
 
 use crate::accel::Bvh;
 use crate::camera::Camera;
+use crate::desc::EmissionSpectrum;
 use crate::light::{BoundingSphere, Light};
 use crate::material::{Material, ShadingPoint};
 use crate::shape::Shape;
@@ -96,6 +97,8 @@ pub struct Scene {
     pub background: Option<u32>,
     /// Surface attributes referenced by [`Primitive::attributes`].
     pub attributes: Vec<SurfaceAttributes>,
+    /// Emission spectra by light index (missing or `None`: the RGB value is upsampled).
+    light_spectra: Vec<Option<LightSpectrum>>,
     /// Light selection: proportional to each light's emitted power.
     light_selection: Option<Distribution1D>,
     bvh: Bvh,
@@ -129,6 +132,7 @@ impl Scene {
             bounding_sphere,
             background,
             attributes: Vec::new(),
+            light_spectra: Vec::new(),
             light_selection,
             bvh,
         }
@@ -138,6 +142,18 @@ impl Scene {
     pub fn with_attributes(mut self, attributes: Vec<SurfaceAttributes>) -> Self {
         self.attributes = attributes;
         self
+    }
+
+    /// Sets the emission spectra of the lights, by light index (a shorter list leaves the
+    /// remaining lights without a spectrum).
+    pub fn with_light_spectra(mut self, spectra: Vec<Option<LightSpectrum>>) -> Self {
+        self.light_spectra = spectra;
+        self
+    }
+
+    /// The emission spectrum of light `index`, if it has one.
+    pub fn light_spectrum(&self, index: u32) -> Option<&LightSpectrum> {
+        self.light_spectra.get(index as usize).and_then(Option::as_ref)
     }
 
     /// Nearest intersection of `ray` (any distance > 0).
@@ -217,12 +233,20 @@ impl Scene {
     }
 
     /// Light `index`'s emitted quantity `rgb` (a radiance, intensity or irradiance one of its
-    /// queries returned, linear sRGB) in spectral mode `S`: in RGB mode `rgb` itself, in
-    /// spectral mode its upsampled spectrum times the colour space's illuminant.
+    /// queries returned, linear sRGB) in spectral mode `S`. In RGB mode it is `rgb` itself. In
+    /// spectral mode, a light without a spectrum gives the upsampled `rgb` times the colour
+    /// space's illuminant; a light with a spectrum `s` gives `s(λ) · k` (per nm), where
+    /// `k = rgb / base` is the scalar its query applied to its base value (see
+    /// [`LightSpectrum::factor`]).
     #[inline]
     pub fn emission<S: SpectralMode>(&self, index: u32, wavelengths: &S::Wavelengths, rgb: Rgb) -> S {
-        let _ = index;
-        S::from_emission(wavelengths, rgb)
+        match self.light_spectrum(index) {
+            Some(s) => {
+                let k = s.factor(rgb);
+                S::from_function(wavelengths, |lambda| k * s.spectrum.eval(lambda), rgb)
+            }
+            None => S::from_emission(wavelengths, rgb),
+        }
     }
 
     /// Probability with which [`Scene::pick_light`] picks light `index`.
@@ -239,5 +263,36 @@ impl Scene {
     /// The material of a hit.
     pub fn material(&self, hit: &SurfaceHit) -> &Material {
         &self.materials[hit.material as usize]
+    }
+}
+
+/// The emission spectrum of a light and the RGB value the light stores for it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightSpectrum {
+    /// The emitted spectral quantity (per nm).
+    pub spectrum: EmissionSpectrum,
+    /// The light's own RGB value (radiance, intensity or irradiance as the light stores it):
+    /// every query of the light returns `base` times a non-negative scalar (the spot falloff,
+    /// the cosine of an emission sample, 1 otherwise).
+    pub base: Rgb,
+}
+
+impl LightSpectrum {
+    /// The scalar `k` with `rgb = k · base`, recovered from the largest channel of `base`
+    /// (any positive channel gives the same ratio, up to rounding, since a query scales all
+    /// channels alike; the largest one rounds least). A black `base` gives 0: such a light
+    /// emits nothing in RGB mode, and a non-negative spectrum whose colour clamps to black has no
+    /// luminance either.
+    #[inline]
+    pub fn factor(&self, rgb: Rgb) -> f32 {
+        let (b, q) = (self.base, rgb);
+        let (base, value) = if b.r >= b.g && b.r >= b.b {
+            (b.r, q.r)
+        } else if b.g >= b.b {
+            (b.g, q.g)
+        } else {
+            (b.b, q.b)
+        };
+        if base > 0.0 { value / base } else { 0.0 }
     }
 }

@@ -430,10 +430,35 @@ impl<'a> Loader<'a> {
                     _ => return Err(p.error("needs one or two nested BSDFs")),
                 }
             }
+            "fluorescent" => self.fluorescent(&p)?,
             other => return Err(p.error(format!("unsupported bsdf type '{other}'"))),
         };
         p.ignore(&["sample_visible"]);
         p.finish(&mut self.warnings);
+        Ok(material)
+    }
+
+    /// `<bsdf type="fluorescent">` (our extension): a Lambertian `reflectance` (colour or
+    /// texture, default 0.5) plus fluorescence with raised-cosine bands
+    /// ([`spectrum::fluorescence`]): `absorption_center`, `absorption_width`,
+    /// `emission_center`, `emission_width` (nm, the widths are half widths of the support;
+    /// required), `absorption_peak` (fraction absorbed at the centre, in [0, 1], default 0.5)
+    /// and `quantum_yield` (fraction of the absorbed energy re-emitted, in [0, 1], default 1).
+    /// Bad numbers, an emission band not entirely above the absorption band, and a material
+    /// that would reflect more than it receives are errors at the element.
+    fn fluorescent(&mut self, p: &Plugin<'a>) -> Result<Material, SceneError> {
+        use spectrum::fluorescence::{Band, Fluorescence};
+        let reflectance = self.texture_prop(p, "reflectance", 0.5, SpectrumUse::Reflectance)?;
+        let band = |centre: &str, width: &str| -> Result<Band, SceneError> {
+            Ok(Band { center_nm: p.float_required(centre)? as f32, half_width_nm: p.float_required(width)? as f32 })
+        };
+        let absorption = band("absorption_center", "absorption_width")?;
+        let emission = band("emission_center", "emission_width")?;
+        let peak = p.float_or("absorption_peak", 0.5)? as f32;
+        let quantum_yield = p.float_or("quantum_yield", 1.0)? as f32;
+        let fluorescence = Fluorescence::new(peak, absorption, emission, quantum_yield).map_err(|e| p.error(e))?;
+        let material = Material::Fluorescent { reflectance, fluorescence };
+        material.validate().map_err(|e| p.error(e))?;
         Ok(material)
     }
 

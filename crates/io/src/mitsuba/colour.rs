@@ -90,10 +90,15 @@ pub(crate) fn xyz_to_srgb(xyz: [f64; 3]) -> [f64; 3] {
 /// The XYZ tristimulus values of `spectrum` (wavelength in nm, value) with the normalisation of
 /// `usage` (see the module documentation).
 pub(crate) fn spectrum_to_xyz(spectrum: &[(f64, f64)], usage: SpectrumUse) -> [f64; 3] {
+    function_to_xyz(|l| sample(spectrum, l), usage)
+}
+
+/// The XYZ tristimulus values of the spectrum `f(λ nm)` with the normalisation of `usage`.
+fn function_to_xyz(f: impl Fn(f64) -> f64, usage: SpectrumUse) -> [f64; 3] {
     let weighted = usage != SpectrumUse::Emission;
     let weight = |l: f64| if weighted { table(&D65, l) } else { 1.0 };
     let xyz = integrate(|l| {
-        let s = sample(spectrum, l) * weight(l);
+        let s = f(l) * weight(l);
         [table(&CIE_X, l) * s, table(&CIE_Y, l) * s, table(&CIE_Z, l) * s]
     });
     let norm = integrate(|l| [table(&CIE_Y, l) * weight(l), 0.0, 0.0])[0];
@@ -117,4 +122,16 @@ pub(crate) fn constant_spectrum_to_rgb(value: f64, usage: SpectrumUse) -> [f64; 
         SpectrumUse::Emission => xyz_to_srgb([1.0; 3]).map(|v| v * value),
         _ => [value; 3],
     }
+}
+
+/// Linear sRGB of an emitted blackbody, `scale` times Planck's law at `kelvin`
+/// (W·m⁻²·sr⁻¹·nm⁻¹, [`spectrum::cie::blackbody`]), with the emission normalisation (what
+/// Mitsuba's spectral variants report for it; its RGB variants have no blackbody), clamped to
+/// ≥ 0 like any emitter (blackbodies below about 1500 K lie slightly outside the gamut).
+pub(crate) fn blackbody_to_rgb(kelvin: f64, scale: f64) -> [f64; 3] {
+    let xyz = function_to_xyz(
+        |l| scale * f64::from(spectrum::cie::blackbody(l as f32, kelvin as f32)),
+        SpectrumUse::Emission,
+    );
+    xyz_to_srgb(xyz).map(|v| v.max(0.0))
 }

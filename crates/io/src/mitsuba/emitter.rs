@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use scene::desc::{LightDesc, TextureImage};
+use scene::desc::{EmissionSpectrum, LightDesc, TextureImage};
 use spectrum::Rgb;
 
 use super::Loader;
@@ -16,9 +16,17 @@ fn rgb(v: [f64; 3]) -> Rgb {
     Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32)
 }
 
+/// What an area emitter emits: its radiance (linear sRGB, W·m⁻²·sr⁻¹) and, when the file
+/// gives it spectrally, its spectral radiance (W·m⁻²·sr⁻¹·nm⁻¹).
+#[derive(Clone, Debug)]
+pub(crate) struct AreaEmission {
+    pub radiance: Rgb,
+    pub spectrum: Option<EmissionSpectrum>,
+}
+
 impl<'a> Loader<'a> {
     /// An `<emitter type="area">`: its radiance.
-    pub(crate) fn area_emitter(&mut self, node: &'a Node) -> Result<Rgb, SceneError> {
+    pub(crate) fn area_emitter(&mut self, node: &'a Node) -> Result<AreaEmission, SceneError> {
         let p = Plugin::new(node)?;
         if p.ty != "area" {
             return Err(p.error("only area emitters can be attached to shapes"));
@@ -26,13 +34,19 @@ impl<'a> Loader<'a> {
         let radiance = p
             .color("radiance", SpectrumUse::Emission, &mut self.warnings)?
             .ok_or_else(|| p.error("missing required property 'radiance'"))?;
+        let spectrum = p.emission_spectrum("radiance")?;
         p.finish(&mut self.warnings);
-        Ok(rgb(radiance))
+        Ok(AreaEmission { radiance: rgb(radiance), spectrum })
     }
 
-    /// An emitter color with a default.
+    /// An emitter color with a default, and its spectrum when the file gives one (recorded for
+    /// the light about to be pushed).
     fn emitted(&mut self, p: &Plugin, name: &str, default: f64) -> Result<Rgb, SceneError> {
-        Ok(rgb(p.color(name, SpectrumUse::Emission, &mut self.warnings)?.unwrap_or([default; 3])))
+        let value = rgb(p.color(name, SpectrumUse::Emission, &mut self.warnings)?.unwrap_or([default; 3]));
+        if let Some(spectrum) = p.emission_spectrum(name)? {
+            self.emission_spectra.lights.insert(self.lights.len() as u32, spectrum);
+        }
+        Ok(value)
     }
 
     /// A light that is not attached to a shape.

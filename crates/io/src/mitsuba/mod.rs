@@ -20,7 +20,10 @@
 //!   takes the normal from the transformed triangle, so there a mirrored emitter would emit to
 //!   the other side in Mitsuba;
 //! - `max_depth` counts path segments (−1 = unlimited);
-//! - spectra become linear sRGB as in Mitsuba's RGB variants (`colour`);
+//! - spectra become linear sRGB as in Mitsuba's RGB variants (`colour`); emitters given by a
+//!   tabulated, constant or blackbody spectrum also keep it
+//!   ([`SceneDescription::emission_spectra`]) for spectral rendering;
+//! - `<bsdf type="fluorescent">` is our extension (see `bsdf.rs`);
 //! - Beckmann microfacet distributions (Mitsuba's default for the rough plugins) are
 //!   approximated by GGX with the same `alpha`, with a warning.
 //!
@@ -43,11 +46,12 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use scene::Texture;
-use scene::desc::{CameraDesc, FilmDesc, LightDesc, SceneDescription, ShapeDesc, TextureImage};
+use scene::desc::{CameraDesc, EmissionSpectra, FilmDesc, LightDesc, SceneDescription, ShapeDesc, TextureImage};
 use scene::material::Material;
 use spectrum::Rgb;
 
 use crate::scene_error::SceneError;
+use emitter::AreaEmission;
 use xml::Node;
 
 pub use colour_api::*;
@@ -90,8 +94,8 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDescriptio
 pub(crate) enum Resolved {
     Bsdf(Material),
     Texture(Texture),
-    /// An area emitter's radiance.
-    AreaEmitter(Rgb),
+    /// An area emitter's radiance (and spectrum).
+    AreaEmitter(AreaEmission),
     /// Any other object (named by its tag) that cannot be referenced here.
     Other(String),
 }
@@ -118,6 +122,7 @@ pub(crate) struct Loader<'a> {
     default_material: Option<u32>,
     shapes: Vec<ShapeDesc>,
     lights: Vec<LightDesc>,
+    emission_spectra: EmissionSpectra,
     attached_emitters: HashSet<String>,
     images: HashMap<(PathBuf, bool), Arc<TextureImage>>,
     camera: Option<(CameraDesc, FilmDesc)>,
@@ -138,6 +143,7 @@ impl<'a> Loader<'a> {
             default_material: None,
             shapes: Vec::new(),
             lights: Vec::new(),
+            emission_spectra: EmissionSpectra::default(),
             attached_emitters: HashSet::new(),
             images: HashMap::new(),
             camera: None,
@@ -332,6 +338,7 @@ impl<'a> Loader<'a> {
             lights: self.lights,
             max_path_length: self.max_path_length,
             warnings: self.warnings,
+            emission_spectra: self.emission_spectra,
         })
     }
 }

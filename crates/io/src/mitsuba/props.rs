@@ -5,7 +5,12 @@
 
 use std::cell::Cell;
 
-use super::colour::{SpectrumUse, constant_spectrum_to_rgb, spectrum_to_rgb};
+use std::sync::Arc;
+
+use scene::desc::EmissionSpectrum;
+use spectrum::tabulated::Tabulated;
+
+use super::colour::{SpectrumUse, blackbody_to_rgb, constant_spectrum_to_rgb, spectrum_to_rgb};
 use super::transform::Mat4;
 use super::xml::{Node, Pos};
 use crate::scene_error::SceneError;
@@ -26,6 +31,14 @@ pub(crate) enum Value {
     SpectrumConstant(f64),
     /// Wavelength (nm) / value pairs, strictly increasing wavelengths.
     SpectrumTable(Vec<(f64, f64)>),
+    /// Planck's law (W·m⁻²·sr⁻¹·nm⁻¹) at `kelvin` times `scale`: `<spectrum type="blackbody">`
+    /// (Mitsuba 3) or `<blackbody temperature=… scale=…/>` (the older short form).
+    Blackbody {
+        /// Temperature (K, > 0).
+        kelvin: f64,
+        /// Factor (≥ 0).
+        scale: f64,
+    },
     /// `<point>` or `<vector>`.
     Vector([f64; 3]),
     Transform(Mat4),
@@ -39,7 +52,7 @@ impl Value {
             Value::Boolean(_) => "boolean",
             Value::Str(_) => "string",
             Value::Rgb(_) => "rgb",
-            Value::SpectrumConstant(_) | Value::SpectrumTable(_) => "spectrum",
+            Value::SpectrumConstant(_) | Value::SpectrumTable(_) | Value::Blackbody { .. } => "spectrum",
             Value::Vector(_) => "point/vector",
             Value::Transform(_) => "transform",
         }
@@ -285,12 +298,45 @@ impl<'a> Plugin<'a> {
                 }
                 rgb
             }
+            Value::Blackbody { kelvin, scale } => {
+                if usage != SpectrumUse::Emission {
+                    return Err(p.pos.error(format!(
+                        "{}: property '{name}': a blackbody spectrum can only be emitted",
+                        self.what()
+                    )));
+                }
+                blackbody_to_rgb(*kelvin, *scale)
+            }
             _ => return Err(self.wrong_type(p, "rgb, spectrum or float")),
         };
         if rgb.iter().any(|v| !v.is_finite()) {
             return Err(p.pos.error(format!("{}: property '{name}' is not finite", self.what())));
         }
         Ok(Some(rgb))
+    }
+
+    /// The spectrum of an emitted colour property `name` (read after [`Plugin::color`]), when
+    /// the file gives one: a tabulated spectrum, a constant `<spectrum value="c"/>` (emitting
+    /// `c` at every wavelength of 360–830 nm, as Mitsuba's spectral variants do) or a
+    /// blackbody. `rgb` and plain numbers have none (spectral rendering upsamples them).
+    pub fn emission_spectrum(&self, name: &str) -> Result<Option<EmissionSpectrum>, SceneError> {
+        let Some(p) = self.prop(name) else { return Ok(None) };
+        let table = |pairs: &[(f64, f64)]| -> Result<EmissionSpectrum, SceneError> {
+            let points: Vec<(f32, f32)> = pairs.iter().map(|&(l, v)| (l as f32, v as f32)).collect();
+            let t =
+                Tabulated::new(&points).map_err(|e| p.pos.error(format!("{}: property '{name}': {e}", self.what())))?;
+            Ok(EmissionSpectrum::Tabulated(Arc::new(t)))
+        };
+        let spectrum = match &p.value {
+            Value::SpectrumTable(pairs) => table(pairs)?,
+            Value::SpectrumConstant(c) => table(&[(360.0, *c), (830.0, *c)])?,
+            Value::Blackbody { kelvin, scale } => {
+                EmissionSpectrum::Blackbody { kelvin: *kelvin as f32, scale: *scale as f32 }
+            }
+            _ => return Ok(None),
+        };
+        spectrum.validate().map_err(|e| p.pos.error(format!("{}: property '{name}': {e}", self.what())))?;
+        Ok(Some(spectrum))
     }
 
     /// Marks properties that do not influence the rendered image as used, so that they
@@ -361,6 +407,16 @@ fn parse_value(node: &Node) -> Result<Value, SceneError> {
             }
         }
         "spectrum" => parse_spectrum(node, name)?,
+        "blackbody" => {
+            let text = node.required_attr("temperature")?;
+            let kelvin = text.trim().strip_suffix(['K', 'k']).unwrap_or(text);
+            let kelvin = parse_number(kelvin, node, name)?;
+            let scale = match node.attr("scale") {
+                Some(v) => parse_number(v, node, name)?,
+                None => 1.0,
+            };
+            blackbody(node, name, kelvin, scale)?
+        }
         "point" | "vector" => parse_vector(node, name, 0.0)?,
         "transform" => Value::Transform(parse_transform(node)?),
         other => return Err(node.pos.error(format!("unknown element <{other}>"))),
@@ -403,7 +459,49 @@ fn parse_vector(node: &Node, name: &str, default: f64) -> Result<Value, SceneErr
     Ok(Value::Vector(parse_xyz(node, name, default)?))
 }
 
+/// A checked blackbody value.
+fn blackbody(node: &Node, name: &str, kelvin: f64, scale: f64) -> Result<Value, SceneError> {
+    if !(kelvin.is_finite() && kelvin > 0.0) {
+        return Err(node.pos.error(format!("blackbody '{name}': the temperature must be positive, got {kelvin} K")));
+    }
+    if !(scale.is_finite() && scale >= 0.0) {
+        return Err(node.pos.error(format!("blackbody '{name}': the scale must be non-negative, got {scale}")));
+    }
+    Ok(Value::Blackbody { kelvin, scale })
+}
+
+/// `<spectrum type="blackbody">` with `<float name="temperature">` (required) and
+/// `<float name="scale">` (our addition, default 1) inside.
+fn parse_typed_spectrum(node: &Node, name: &str, ty: &str) -> Result<Value, SceneError> {
+    if ty != "blackbody" {
+        return Err(node.pos.error(format!("spectrum '{name}': unsupported spectrum type '{ty}' (blackbody is)")));
+    }
+    let (mut kelvin, mut scale) = (None, 1.0);
+    for child in &node.children {
+        let field = child.required_attr("name")?;
+        let value = match parse_value(child)? {
+            Value::Float(v) => v,
+            Value::Integer(v) => v as f64,
+            _ => return Err(child.pos.error(format!("blackbody '{name}': '{field}' must be a float"))),
+        };
+        match field {
+            "temperature" => kelvin = Some(value),
+            "scale" => scale = value,
+            other => {
+                return Err(child.pos.error(format!(
+                    "blackbody '{name}': unknown parameter '{other}' (temperature and scale are known)"
+                )));
+            }
+        }
+    }
+    let kelvin = kelvin.ok_or_else(|| node.pos.error(format!("blackbody '{name}': missing float 'temperature'")))?;
+    blackbody(node, name, kelvin, scale)
+}
+
 fn parse_spectrum(node: &Node, name: &str) -> Result<Value, SceneError> {
+    if let Some(ty) = node.attr("type") {
+        return parse_typed_spectrum(node, name, ty);
+    }
     let pairs: Vec<(f64, f64)> = if let Some(filename) = node.attr("filename") {
         let dir = node.pos.file.parent().map(|d| d.join(filename)).unwrap_or_else(|| filename.into());
         let text = std::fs::read_to_string(&dir)

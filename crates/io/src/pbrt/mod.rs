@@ -55,12 +55,13 @@ use std::sync::Arc;
 
 use math::{Vec2, Vec3};
 use scene::desc::{
-    CameraDesc, FilmDesc, FilterDesc, Geometry, LightDesc, MeshData, Projection, SceneDescription, ShapeDesc,
-    TextureImage, UvTransform,
+    CameraDesc, EmissionSpectra, EmissionSpectrum, FilmDesc, FilterDesc, Geometry, LightDesc, MeshData, Projection,
+    SceneDescription, ShapeDesc, TextureImage, UvTransform,
 };
 use scene::material::Material;
 use scene::texture::Texture;
 use spectrum::Rgb;
+use spectrum::tabulated::Tabulated;
 
 use crate::pbrt::parser::{Directive, ParamSet, Parser, Value};
 use crate::pbrt::tokenizer::Pos;
@@ -93,6 +94,8 @@ struct GraphicsState {
     material: Option<u32>,
     /// Radiance of the current area light.
     area_light: Option<Rgb>,
+    /// Its spectrum, when given spectrally.
+    area_light_spectrum: Option<EmissionSpectrum>,
 }
 
 /// What a `*Begin` pushed.
@@ -135,6 +138,7 @@ struct Builder {
     default_material: Option<u32>,
     shapes: Vec<ShapeDesc>,
     lights: Vec<LightDesc>,
+    emission_spectra: EmissionSpectra,
     warnings: Vec<String>,
 }
 
@@ -150,7 +154,13 @@ impl Builder {
     fn new() -> Self {
         Self {
             world: false,
-            state: GraphicsState { ctm: Mat4::IDENTITY, reverse_orientation: false, material: None, area_light: None },
+            state: GraphicsState {
+                ctm: Mat4::IDENTITY,
+                reverse_orientation: false,
+                material: None,
+                area_light: None,
+                area_light_spectrum: None,
+            },
             stack: Vec::new(),
             named_coordinate_systems: HashMap::new(),
             named_materials: HashMap::new(),
@@ -164,6 +174,7 @@ impl Builder {
             default_material: None,
             shapes: Vec::new(),
             lights: Vec::new(),
+            emission_spectra: EmissionSpectra::default(),
             warnings: Vec::new(),
         }
     }
@@ -429,6 +440,7 @@ impl Builder {
             lights: self.lights,
             max_path_length: self.max_path_length,
             warnings: self.warnings,
+            emission_spectra: self.emission_spectra,
         })
     }
 
@@ -630,21 +642,42 @@ impl Builder {
         }
     }
 
-    /// A light's spectrum as RGB radiance/intensity before `scale` (see [`color`]).
-    fn light_spectrum(&self, p: &ParamSet, name: &str) -> Result<Rgb, SceneError> {
-        let Some(param) = p.find(name) else { return Ok(Rgb::WHITE) };
+    /// A light's spectrum as RGB radiance/intensity before `scale` (see [`color`]) and, for
+    /// blackbody, sampled and constant spectra, the spectrum itself, normalised like the RGB
+    /// value to luminance `Y = ∫ s ȳ dλ / ∫ ȳ dλ = 1` (pbrt-v4's photometric normalisation; its
+    /// blackbody is normalised to peak 1 first, which this cancels).
+    fn light_emission(&self, p: &ParamSet, name: &str) -> Result<(Rgb, Option<EmissionSpectrum>), SceneError> {
+        let Some(param) = p.find(name) else { return Ok((Rgb::WHITE, None)) };
         let pos = param.pos;
         let nums = param.numbers();
         let normalised = |s: &dyn Fn(f64) -> f64| {
             color::emission_rgb(s).ok_or_else(|| p.error(pos, format!("parameter '{name}': spectrum has no luminance")))
         };
+        // The spectrum scaled to Y = 1 (None when it has no luminance: the RGB path reports it).
+        let unit = |s: EmissionSpectrum| -> Result<Option<EmissionSpectrum>, SceneError> {
+            let y = s.xyz()[1];
+            if !(y > 0.0 && y.is_finite()) {
+                return Ok(None);
+            }
+            let s = s.scaled((1.0 / y) as f32).map_err(|e| p.error(pos, format!("parameter '{name}': {e}")))?;
+            s.validate().map_err(|e| p.error(pos, format!("parameter '{name}': {e}")))?;
+            Ok(Some(s))
+        };
+        let flat = || -> Result<Option<EmissionSpectrum>, SceneError> {
+            let t = Tabulated::new(&[(360.0, 1.0), (830.0, 1.0)]).map_err(|e| p.error(pos, e))?;
+            unit(EmissionSpectrum::Tabulated(Arc::new(t)))
+        };
+        let mut spectrum = None;
         let rgb = match param.ty.as_str() {
             "rgb" => match nums[..] {
                 [r, g, b] => Rgb::new(r as f32, g as f32, b as f32),
                 _ => return Err(p.error(pos, format!("parameter '{name}' needs 3 values, got {}", nums.len()))),
             },
             "blackbody" => match nums[..] {
-                [t] if t > 0.0 => normalised(&|l| color::planck(l, t))?,
+                [t] if t > 0.0 => {
+                    spectrum = unit(EmissionSpectrum::Blackbody { kelvin: t as f32, scale: 1.0 })?;
+                    normalised(&|l| color::planck(l, t))?
+                }
                 _ => return Err(p.error(pos, format!("parameter '{name}' needs one positive temperature in kelvin"))),
             },
             "spectrum" => match &param.values[..] {
@@ -652,7 +685,10 @@ impl Builder {
                 [Value::Str(s)] => {
                     return Err(p.error(pos, format!("named spectrum \"{s}\" is not supported for lights (stdillum-D65, blackbody, rgb or sampled spectra are)")));
                 }
-                [Value::Num(_)] => normalised(&|_| 1.0)?,
+                [Value::Num(_)] => {
+                    spectrum = flat()?;
+                    normalised(&|_| 1.0)?
+                }
                 _ => {
                     let s = color::piecewise_linear(&nums).filter(|_| nums.len() % 2 == 0).ok_or_else(|| {
                         p.error(
@@ -660,10 +696,17 @@ impl Builder {
                             format!("parameter '{name}': expected wavelength/value pairs with increasing wavelengths"),
                         )
                     })?;
+                    let points: Vec<(f32, f32)> = nums.chunks_exact(2).map(|c| (c[0] as f32, c[1] as f32)).collect();
+                    let table =
+                        Tabulated::new(&points).map_err(|e| p.error(pos, format!("parameter '{name}': {e}")))?;
+                    spectrum = unit(EmissionSpectrum::Tabulated(Arc::new(table)))?;
                     normalised(&s)?
                 }
             },
-            "float" => normalised(&|_| 1.0)?,
+            "float" => {
+                spectrum = flat()?;
+                normalised(&|_| 1.0)?
+            }
             other => {
                 return Err(p.error(
                     pos,
@@ -674,7 +717,7 @@ impl Builder {
         if !rgb.is_finite() {
             return Err(p.error(pos, format!("parameter '{name}' is not finite")));
         }
-        Ok(rgb)
+        Ok((rgb, spectrum))
     }
 
     fn texture_directive(&mut self, file: &Path, d: &Directive) -> Result<(), SceneError> {
@@ -1076,6 +1119,9 @@ impl Builder {
             other => return Err(err(file, d.arg_pos[0], format!("unknown shape type \"{other}\""))),
         };
         let material = self.current_material();
+        if let (Some(_), Some(spectrum)) = (self.state.area_light, &self.state.area_light_spectrum) {
+            self.emission_spectra.shapes.insert(self.shapes.len() as u32, spectrum.clone());
+        }
         self.shapes.push(ShapeDesc { name, geometry, material, emission: self.state.area_light });
         self.warn_unused(p);
         Ok(())
@@ -1137,9 +1183,13 @@ impl Builder {
             let pos = p.find("twosided").map_or(d.pos, |x| x.pos);
             return Err(p.error(pos, "two-sided area lights are not supported (our emitters are one-sided)"));
         }
-        let l = self.light_spectrum(p, "L")?;
+        let (l, spectrum) = self.light_emission(p, "L")?;
         let scale = p.float("scale", 1.0)?;
         self.state.area_light = Some(l * scale);
+        self.state.area_light_spectrum = match spectrum {
+            Some(s) => Some(s.scaled(scale).map_err(|e| err(file, d.pos, e))?),
+            None => None,
+        };
         self.warn_unused(p);
         Ok(())
     }
@@ -1160,9 +1210,14 @@ impl Builder {
                 .map(f32v)
                 .ok_or_else(|| err(file, d.pos, "'from' and 'to' coincide"))
         };
+        // The unscaled RGB value and spectrum of a light given spectrally.
+        let mut spectrum: Option<(Rgb, EmissionSpectrum)> = None;
         let light = match d.str_arg(0) {
             "point" => {
-                let mut intensity = self.light_spectrum(p, "I")? * scale;
+                let mut intensity = self.light_emission(p, "I").map(|(c, s)| {
+                    spectrum = s.map(|s| (c, s));
+                    c
+                })? * scale;
                 if let Some(power) = p.float_opt("power")? {
                     intensity *= power / (4.0 * std::f32::consts::PI);
                 }
@@ -1176,7 +1231,10 @@ impl Builder {
                 if !(cone > 0.0 && cone <= 180.0 && (0.0..=cone).contains(&delta)) {
                     return Err(err(file, d.pos, format!("spot: coneangle {cone} / conedelta {delta} out of range")));
                 }
-                let mut intensity = self.light_spectrum(p, "I")? * scale;
+                let mut intensity = self.light_emission(p, "I").map(|(c, s)| {
+                    spectrum = s.map(|s| (c, s));
+                    c
+                })? * scale;
                 if let Some(power) = p.float_opt("power")? {
                     let (cos_end, cos_start) = (cone.to_radians().cos(), (cone - delta).to_radians().cos());
                     let k = 2.0 * std::f32::consts::PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0);
@@ -1193,7 +1251,10 @@ impl Builder {
             "distant" => {
                 let from = point3("from", [0.0; 3])?;
                 let to = point3("to", [0.0, 0.0, 1.0])?;
-                let mut irradiance = self.light_spectrum(p, "L")? * scale;
+                let mut irradiance = self.light_emission(p, "L").map(|(c, s)| {
+                    spectrum = s.map(|s| (c, s));
+                    c
+                })? * scale;
                 if let Some(e) = p.float_opt("illuminance")? {
                     irradiance *= e;
                 }
@@ -1209,7 +1270,12 @@ impl Builder {
                     }
                 }
                 match p.string("filename")? {
-                    None => LightDesc::Constant { radiance: self.light_spectrum(p, "L")? * scale },
+                    None => LightDesc::Constant {
+                        radiance: self.light_emission(p, "L").map(|(c, s)| {
+                            spectrum = s.map(|s| (c, s));
+                            c
+                        })? * scale,
+                    },
                     Some((filename, fpos)) => {
                         if let Some(x) = p.find("L") {
                             return Err(p.error(x.pos, "'L' and 'filename' exclude each other"));
@@ -1241,6 +1307,18 @@ impl Builder {
             }
             other => return Err(err(file, d.arg_pos[0], format!("unknown light type \"{other}\""))),
         };
+        if let Some((unscaled, s)) = spectrum {
+            // The file's scale, power and illuminance factors multiply every channel alike.
+            let value = match &light {
+                LightDesc::Point { intensity, .. } | LightDesc::Spot { intensity, .. } => *intensity,
+                LightDesc::Directional { irradiance, .. } => *irradiance,
+                LightDesc::Constant { radiance } => *radiance,
+                LightDesc::EnvMap { .. } => Rgb::BLACK,
+            };
+            let base = scene::LightSpectrum { spectrum: s, base: unscaled };
+            let scaled = base.spectrum.scaled(base.factor(value)).map_err(|e| err(file, d.pos, e))?;
+            self.emission_spectra.lights.insert(self.lights.len() as u32, scaled);
+        }
         self.lights.push(light);
         self.warn_unused(p);
         Ok(())
