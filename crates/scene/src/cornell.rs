@@ -377,7 +377,11 @@ mod tests {
             let Shape::Triangle(t) = p.shape else { panic!() };
             assert!(t.normal.dot(center - t.p0) > 0.0, "box normals point into the box");
         }
-        assert!(build(512, 8, 8).is_none());
+        assert!(build(MAX_MASK + 1, 8, 8).is_none());
+        // The fluorescent variant: the large sphere is fluorescent and the only extra material.
+        let fluorescent = build(FLUORESCENT | CEILING_LIGHT, 8, 8).unwrap();
+        assert!(fluorescent.has_fluorescence() && !scene.has_fluorescence());
+        assert_eq!(fluorescent.materials.len(), scene.materials.len() + 1);
         // Ceiling + point: the whole ceiling emits 3/π.
         let both = build(1 | 4, 8, 8).unwrap();
         assert_eq!(both.lights.len(), 3);
