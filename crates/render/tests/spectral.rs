@@ -107,13 +107,14 @@ const UNBIASED: [Run; 3] = [
 ];
 
 // Merging algorithms share one wavelength set per iteration: the iterations' image means
-// scatter with the colour noise of four wavelengths (measured: a standard deviation of about
-// 0.6 of the value per iteration in the blue channel of vcm, ppm and bpm). Merging bias at radius
+// scatter with the colour noise of four wavelengths (measured standard deviation per iteration
+// in the blue channel: 0.6 of the value for vcm at 16², 0.8 for ppm and bpm at 64², where photon
+// noise adds to it; at 32² the photon noise of the small radius dominates, 1.9). Merging bias at radius
 // 1e-3·√3: see `vcm_furnace.rs` (relative 5e-4, at most 3e-3, below the standard errors here).
 const MERGING_FAST: [Run; 1] = [Run { algorithm: "vcm", resolution: 16, iterations: 1500, radius_factor: 1e-3 }];
 const MERGING_SLOW: [Run; 2] = [
-    Run { algorithm: "ppm", resolution: 32, iterations: 6000, radius_factor: 1e-3 },
-    Run { algorithm: "bpm", resolution: 32, iterations: 6000, radius_factor: 1e-3 },
+    Run { algorithm: "ppm", resolution: 64, iterations: 3000, radius_factor: 1e-3 },
+    Run { algorithm: "bpm", resolution: 64, iterations: 3000, radius_factor: 1e-3 },
 ];
 
 /// (Le, ρ, K): white walls (ρ = 1, the radiance grows by Le per segment) and grey walls.
