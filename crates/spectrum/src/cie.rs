@@ -256,6 +256,39 @@ const fn mat_f32(m: &[[f64; 3]; 3]) -> [[f32; 3]; 3] {
 const SRGB_TO_XYZ_F32: [[f32; 3]; 3] = mat_f32(&SRGB_TO_XYZ);
 const XYZ_TO_SRGB_F32: [[f32; 3]; 3] = mat_f32(&XYZ_TO_SRGB);
 
+/// The linear-sRGB colour matching functions on the 5 nm grid: `M_XYZ→sRGB · x̄ȳz̄(λ_i)`.
+/// Interpolating them linearly is the same as converting the interpolated x̄ȳz̄ (the map is
+/// linear), so [`srgb_cmf_at`] is exact with respect to [`cmf`] followed by
+/// [`xyz_to_linear_srgb`].
+const SRGB_CMF: [[f32; 3]; TABLE_LEN] = {
+    let mut out = [[0.0f32; 3]; TABLE_LEN];
+    let mut i = 0;
+    while i < TABLE_LEN {
+        let mut r = 0;
+        while r < 3 {
+            let m = XYZ_TO_SRGB_F32[r];
+            out[i][r] = m[0] * CMF_F32[i][0] + m[1] * CMF_F32[i][1] + m[2] * CMF_F32[i][2];
+            r += 1;
+        }
+        i += 1;
+    }
+    out
+};
+
+/// Linear interpolation of a row table at a located point.
+#[inline]
+fn lerp3(table: &[[f32; 3]; TABLE_LEN], i: usize, t: f32) -> [f32; 3] {
+    let (a, b) = (table[i], table[i + 1]);
+    [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t]
+}
+
+/// The sRGB colour matching functions and D65 at the table point `(i, t)` of
+/// [`locate`] (one lookup for both, for the wavelength sampler).
+#[inline]
+pub(crate) fn srgb_cmf_at(i: usize, t: f32) -> ([f32; 3], f32) {
+    (lerp3(&SRGB_CMF, i, t), D65_F32[i] + (D65_F32[i + 1] - D65_F32[i]) * t)
+}
+
 #[inline]
 fn mul3(m: &[[f32; 3]; 3], v: [f32; 3]) -> [f32; 3] {
     m.map(|row| row[0] * v[0] + row[1] * v[1] + row[2] * v[2])

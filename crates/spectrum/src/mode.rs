@@ -250,23 +250,27 @@ impl Wavelengths4 {
         let (u, v) = (clean(u), clean(v));
         let illuminant_scale = (crate::cie::CIE_Y_INTEGRAL / crate::cie::D65_Y_INTEGRAL) as f32;
         let norm = 1.0 / (HERO_COUNT as f32 * crate::cie::CIE_Y_INTEGRAL as f32);
+        // Rotation in primary sample space without `fract` (the offsets are below 1).
+        let wrap = |x: f32| if x >= 1.0 { x - 1.0 } else { x };
         for j in 0..HERO_COUNT {
             let uj = if paired {
                 let start = if j < 2 { u } else { v };
-                (start + 0.5 * (j % 2) as f32).fract()
+                wrap(start + 0.5 * (j % 2) as f32)
             } else {
-                (u + j as f32 / HERO_COUNT as f32).fract()
+                wrap(u + j as f32 / HERO_COUNT as f32)
             };
-            let lambda = crate::wavelengths::sample_visible(uj);
-            let pdf = crate::wavelengths::visible_pdf(lambda);
+            let (lambda, pdf) = crate::wavelengths::sample_visible_with_pdf(uj);
             w.lambda[j] = lambda;
             w.pdf[j] = pdf;
-            w.basis[j] = crate::upsample::basis(lambda);
-            w.illuminant[j] = crate::cie::d65(lambda) * illuminant_scale;
-            let xyz = crate::cie::cmf(lambda);
-            let scale = if pdf > 0.0 { norm / pdf } else { 0.0 };
-            let rgb = crate::cie::xyz_to_linear_srgb([xyz[0] * scale, xyz[1] * scale, xyz[2] * scale]);
-            w.to_rgb[j] = rgb.to_array();
+            // One table lookup for the basis, D65 and the sRGB colour matching functions (all
+            // on the same 5 nm grid).
+            if let Some((i, t)) = crate::cie::locate(lambda) {
+                w.basis[j] = crate::upsample::basis_at(i, t);
+                let (srgb_cmf, d65) = crate::cie::srgb_cmf_at(i, t);
+                w.illuminant[j] = d65 * illuminant_scale;
+                let scale = if pdf > 0.0 { norm / pdf } else { 0.0 };
+                w.to_rgb[j] = srgb_cmf.map(|c| c * scale);
+            }
         }
         w
     }

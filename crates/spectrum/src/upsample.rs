@@ -43,6 +43,13 @@ pub fn basis(lambda_nm: f32) -> [f32; 3] {
     }
 }
 
+/// The basis at the table point `(i, t)` of `cie::locate` (for the wavelength sampler).
+#[inline]
+pub(crate) fn basis_at(i: usize, t: f32) -> [f32; 3] {
+    let (a, b) = (BASIS[i], BASIS[i + 1]);
+    [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t]
+}
+
 /// The reflectance spectrum of the linear-sRGB colour `rgb` at `lambda_nm` (nm):
 /// `r·b_r(λ) + g·b_g(λ) + b·b_b(λ)`, unitless. In `[0, 1]` for `rgb ∈ [0, 1]³`; linear in
 /// `rgb` (colours outside `[0, 1]³` give spectra outside `[0, 1]`, possibly negative).

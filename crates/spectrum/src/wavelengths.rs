@@ -39,6 +39,19 @@ pub fn sample_visible(u: f32) -> f32 {
     lambda.clamp(LAMBDA_MIN, LAMBDA_MAX)
 }
 
+/// [`sample_visible`] with its density (per nm), in one step and without hyperbolic functions:
+/// with `t = T₀ + u (T₁ − T₀)`, `λ = 538 + atanh(t)/a` and `p(λ) = a/(T₁ − T₀) · sech²(atanh t)
+/// = a/(T₁ − T₀) · (1 − t²)`, and `atanh t = ½ ln((1 + t)/(1 − t))`. About a third of the
+/// instructions of the two separate calls (measured: they dominated the per-path cost of
+/// spectral light tracing).
+#[inline]
+pub fn sample_visible_with_pdf(u: f32) -> (f32, f32) {
+    let u = if u.is_nan() { 0.0 } else { u.clamp(0.0, 1.0) };
+    let t = T0 + u * (T1 - T0);
+    let lambda = CENTRE + 0.5 * ((1.0 + t) / (1.0 - t)).ln() * (1.0 / A);
+    (lambda.clamp(LAMBDA_MIN, LAMBDA_MAX), NORM * (1.0 - t * t))
+}
+
 /// Density (per nm) with which [`sample_visible`] picks `lambda_nm` (nm):
 /// `0.0039398042 / cosh²(0.0072 (λ − 538))` on [[`LAMBDA_MIN`], [`LAMBDA_MAX`]] (integrates to
 /// exactly 1 there), zero outside and for NaN.
@@ -54,6 +67,17 @@ pub fn visible_pdf(lambda_nm: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_fused_sampler_agrees_with_the_separate_functions() {
+        for i in 0..=1000 {
+            let u = i as f32 / 1000.0;
+            let (lambda, pdf) = sample_visible_with_pdf(u);
+            assert!((lambda - sample_visible(u)).abs() < 2e-3, "u = {u}: {lambda} vs {}", sample_visible(u));
+            let reference = visible_pdf(lambda);
+            assert!((pdf - reference).abs() < 2e-5 * reference.max(1e-3), "u = {u}: {pdf} vs {reference}");
+        }
+    }
     use testkit::{assert_chi2, chi2_square};
 
     #[test]
