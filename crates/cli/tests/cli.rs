@@ -63,7 +63,7 @@ fn bad_input_fails_clearly() {
     assert_fails(&["render", "--resolution", "512", "-o", out], &["invalid resolution '512'", "WIDTHxHEIGHT"]);
     assert_fails(&["render", "--resolution", "0x10", "-o", out], &["invalid resolution"]);
     assert_fails(&["render", "--algorithm", "foo", "-o", out], &["invalid value 'foo'", "pt", "vcm"]);
-    assert_fails(&["render", "--scene-mask", "600", "-i", "1", "-o", out], &["invalid scene mask 600"]);
+    assert_fails(&["render", "--scene-mask", "1024", "-i", "1", "-o", out], &["invalid scene mask 1024", "0-1023"]);
     assert_fails(
         &["render", "-i", "1", "-o", "/nonexistent-dir/x.exr"],
         &["cannot write output '/nonexistent-dir/x.exr'"],
