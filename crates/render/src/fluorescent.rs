@@ -19,7 +19,7 @@
 //! ([`spectrum::Wavelengths4::paired`]), so that the input and output wavelengths of a shift
 //! are independent and the two-sample estimate of ∫ dλ_in is unbiased.
 
-use math::Vec2;
+use math::{Rng, Vec2};
 use scene::Material;
 use spectrum::fluorescence::Fluorescence;
 use spectrum::{Rgb, SpectralMode};
@@ -106,6 +106,24 @@ impl<'a> FluorescentVertex<'a> {
             Label::Stay => t * S::from_reflectance(w, self.reflectance).gather(slots) * scale,
             Label::Shift(choice) => S::shift_camera(w, self.fluorescence, choice, slots, t) * scale,
         }
+    }
+}
+
+/// Scatters the slot-indexed quantity `v` at a vertex whose BSDF has value `value` for the
+/// directions at hand: the ordinary product, or, at a fluorescent vertex, a label drawn from
+/// `rng` and applied ([`FluorescentVertex::apply_slots`]). The one rule for every connection
+/// end and next-event estimate.
+#[inline]
+pub fn scatter_slots<S: SpectralMode>(
+    vertex: Option<&FluorescentVertex>,
+    w: &S::Wavelengths,
+    value: Rgb,
+    v: S,
+    rng: &mut Rng,
+) -> S {
+    match vertex {
+        None => v * S::from_reflectance(w, value),
+        Some(f) => f.apply_slots(w, f.sample_label::<S>(rng.uniform()), value, v),
     }
 }
 

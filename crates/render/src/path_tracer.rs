@@ -13,7 +13,7 @@ use scene::{Bsdf, Scene, TransportMode};
 use spectrum::{Hero4, Rgb, SpectralMode};
 
 use crate::balance_heuristic;
-use crate::fluorescent::{FluorescentVertex, view};
+use crate::fluorescent::{FluorescentVertex, scatter_slots, view};
 
 /// Settings of the path tracer.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -132,15 +132,12 @@ fn radiance<S: SpectralMode>(
                 };
                 let emitted = scene.emission::<S>(index, w, direct.radiance);
                 let scale = eval.cos_generated * weight / light_pdf;
-                match &fluorescent {
-                    None if slots == S::Slots::default() => {
-                        result += throughput * emitted * S::from_reflectance(w, eval.value) * scale;
-                    }
-                    None => result += throughput * view(&slots, emitted * S::from_reflectance(w, eval.value)) * scale,
-                    Some(f) => {
-                        let label = f.sample_label::<S>(rng.uniform());
-                        result += throughput * view(&slots, f.apply_slots(w, label, eval.value, emitted)) * scale;
-                    }
+                if fluorescent.is_none() && slots == S::Slots::default() {
+                    // The RGB-era product order, so that RGB renders stay bit-identical.
+                    result += throughput * emitted * S::from_reflectance(w, eval.value) * scale;
+                } else {
+                    let arriving = scatter_slots(fluorescent.as_ref(), w, eval.value, emitted, rng);
+                    result += throughput * view(&slots, arriving) * scale;
                 }
             }
         }

@@ -10,7 +10,7 @@ use super::Iteration;
 use super::light_vertex::LightVertex;
 use super::mis::{self, ConnectionPdfs, MisConstants, NeePdfs};
 use super::subpath::SubPath;
-use crate::fluorescent::{FluorescentVertex, view};
+use crate::fluorescent::{FluorescentVertex, scatter_slots, view};
 
 /// A light-tracing contribution.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,11 +66,7 @@ pub fn connect_to_camera<S: SpectralMode>(
     let camera_pdf_a = connection.area_pdf(eval.cos_generated).0;
     let reverse = eval.pdf.reverse.0 * bsdf.continuation_probability();
     // The pixel integral is over the image plane: the estimate is f·T·(camera pdf)/N_L.
-    let unweighted = match end.fluorescent {
-        None => light.throughput * S::from_reflectance(wavelengths, eval.value),
-        Some(f) => f.apply_slots(wavelengths, f.sample_label::<S>(rng.uniform()), eval.value, light.throughput),
-    }
-    .to_rgb(wavelengths);
+    let unweighted = scatter_slots(end.fluorescent, wavelengths, eval.value, light.throughput, rng).to_rgb(wavelengths);
     let weight_for = |k: &MisConstants| {
         if weighted {
             let light_mis = if it.rebase() { light.mis.for_constants(k) } else { light.mis };
@@ -142,11 +138,7 @@ impl CameraEnd<'_> {
         rng: &mut Rng,
         w: &S::Wavelengths,
     ) -> S {
-        let scattered = match self.fluorescent {
-            None => arriving * S::from_reflectance(w, value),
-            Some(f) => f.apply_slots(w, f.sample_label::<S>(rng.uniform()), value, arriving),
-        };
-        view(&camera.slots, scattered)
+        view(&camera.slots, scatter_slots(self.fluorescent, w, value, arriving, rng))
     }
 }
 
@@ -231,10 +223,7 @@ pub fn connect_vertices<S: SpectralMode>(
     }
     // Fluorescence on the way: scatter the light throughput at the light end, then at the
     // camera end, by slot; read it through the camera path's slots.
-    let leaving = match &light_fluorescent {
-        None => light.throughput * S::from_reflectance(wavelengths, light_eval.value),
-        Some(f) => f.apply_slots(wavelengths, f.sample_label::<S>(rng.uniform()), light_eval.value, light.throughput),
-    };
+    let leaving = scatter_slots(light_fluorescent.as_ref(), wavelengths, light_eval.value, light.throughput, rng);
     let value = end.receive(camera, camera_eval.value, leaving, rng, wavelengths) * (weight * geometry * scale);
     if value.is_black() || scene.occluded(position, direction, distance) {
         return S::default();

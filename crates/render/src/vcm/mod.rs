@@ -327,22 +327,38 @@ const WAVELENGTH_STREAM: u64 = 1 << 61;
 /// Stream index of the wavelengths shared by all sub-paths of an iteration (merging on).
 const SHARED_WAVELENGTHS: u64 = (1 << 61) - 1;
 
-/// The wavelengths of sub-path pair `index` of `iteration`, or of the whole iteration when
-/// `shared` holds them.
-#[inline]
-fn wavelengths_for<S: SpectralMode>(
-    shared: &Option<S::Wavelengths>,
-    scene: &Scene,
-    seed: u64,
-    iteration: u64,
-    index: u64,
-) -> S::Wavelengths {
-    match shared {
-        Some(w) => *w,
-        None => {
-            let mut rng = Rng::for_stream(seed, iteration, WAVELENGTH_STREAM | index);
-            let (u, v) = (rng.uniform(), rng.uniform());
-            S::sample_wavelengths(u, v, scene.has_fluorescence())
+/// Where the sub-paths of one iteration get their wavelengths: one set for the whole iteration
+/// (`shared`, merging on), or one per light/camera sub-path pair. `paired` (the scene has
+/// fluorescence, see [`spectrum::Wavelengths4::paired`]) is decided once per iteration.
+struct WavelengthSource<S: SpectralMode> {
+    shared: Option<S::Wavelengths>,
+    paired: bool,
+}
+
+impl<S: SpectralMode> WavelengthSource<S> {
+    /// The source of iteration `iteration` of `scene`; shared when `merge`.
+    fn new(scene: &Scene, seed: u64, iteration: u64, merge: bool) -> Self {
+        let mut source = Self { shared: None, paired: scene.has_fluorescence() };
+        if merge {
+            source.shared = Some(source.draw(seed, iteration, SHARED_WAVELENGTHS));
+        }
+        source
+    }
+
+    /// Draws the set of stream `index` (two numbers of its own stream).
+    #[inline]
+    fn draw(&self, seed: u64, iteration: u64, index: u64) -> S::Wavelengths {
+        let mut rng = Rng::for_stream(seed, iteration, WAVELENGTH_STREAM | index);
+        let (u, v) = (rng.uniform(), rng.uniform());
+        S::sample_wavelengths(u, v, self.paired)
+    }
+
+    /// The wavelengths of sub-path pair `index` of `iteration`, or the iteration's shared set.
+    #[inline]
+    fn get(&self, seed: u64, iteration: u64, index: u64) -> S::Wavelengths {
+        match &self.shared {
+            Some(w) => *w,
+            None => self.draw(seed, iteration, index),
         }
     }
 }
@@ -509,11 +525,11 @@ impl<S: SpectralMode> Engine<S> {
             pixel_radii: self.pixel_footprints.as_ref().map(|_| pixel_radii.as_slice()),
             techniques,
         };
-        let shared = techniques.merge.then(|| wavelengths_for::<S>(&None, scene, seed, iteration, SHARED_WAVELENGTHS));
+        let sets = WavelengthSource::<S>::new(scene, seed, iteration, techniques.merge);
         let (rejected, splats) = if self.settings.memory_efficient && !techniques.light_trace_only {
-            self.run_single_stage(scene, seed, iteration, &it, frame, &shared)
+            self.run_single_stage(scene, seed, iteration, &it, frame, &sets)
         } else {
-            self.run_two_stages(scene, seed, iteration, &it, frame, &shared)
+            self.run_two_stages(scene, seed, iteration, &it, frame, &sets)
         };
         self.pixel_radii = pixel_radii;
         self.stats.splats = splats;
@@ -531,11 +547,11 @@ impl<S: SpectralMode> Engine<S> {
         iteration: u64,
         it: &Iteration,
         frame: &mut FrameBuffer,
-        shared: &Option<S::Wavelengths>,
+        sets: &WavelengthSource<S>,
     ) -> (RejectedCounts, usize) {
         let pixel_count = frame.pixels.len();
         let start = std::time::Instant::now();
-        let chunks = trace_light_chunks(scene, seed, iteration, it, pixel_count, shared);
+        let chunks = trace_light_chunks(scene, seed, iteration, it, pixel_count, sets);
         self.store.clear();
         for (vertices, ends, _) in &chunks {
             let base = self.store.vertices.len() as u32;
@@ -559,7 +575,7 @@ impl<S: SpectralMode> Engine<S> {
                 let mut rng = Rng::for_stream(seed, iteration, index as u64);
                 let (x, y) = ((index % width) as u32, (index / width) as u32);
                 let light_path = store.path(index);
-                let wavelengths = wavelengths_for::<S>(shared, scene, seed, iteration, index as u64);
+                let wavelengths = sets.get(seed, iteration, index as u64);
                 let merge = merge_source.as_ref();
                 trace_camera_path_recorded(scene, it, x, y, &mut rng, light_path, merge, &wavelengths, techniques)
             });
@@ -588,7 +604,7 @@ impl<S: SpectralMode> Engine<S> {
         iteration: u64,
         it: &Iteration,
         frame: &mut FrameBuffer,
-        shared: &Option<S::Wavelengths>,
+        sets: &WavelengthSource<S>,
     ) -> (RejectedCounts, usize) {
         let pixel_count = frame.pixels.len();
         if it.techniques.merge && !self.merge_seeded {
@@ -597,7 +613,7 @@ impl<S: SpectralMode> Engine<S> {
             // those of the iteration before it (the same random streams, so the same vertices
             // as in an uninterrupted render).
             let source = if iteration == 0 { SEED_ITERATION } else { iteration - 1 };
-            let chunks = trace_light_chunks(scene, seed, source, it, pixel_count, shared);
+            let chunks = trace_light_chunks(scene, seed, source, it, pixel_count, sets);
             self.store.clear();
             for (vertices, _, _) in &chunks {
                 self.store.vertices.extend_from_slice(vertices);
@@ -636,7 +652,7 @@ impl<S: SpectralMode> Engine<S> {
                     let index = row * width + column;
                     let start = vertices.len();
                     let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
-                    let wavelengths = wavelengths_for::<S>(shared, scene, seed, iteration, index as u64);
+                    let wavelengths = sets.get(seed, iteration, index as u64);
                     trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &wavelengths);
                     let mut rng = Rng::for_stream(seed, iteration, index as u64);
                     let light_path = &vertices[start..];
@@ -721,7 +737,7 @@ fn trace_light_chunks<S: SpectralMode>(
     iteration: u64,
     it: &Iteration,
     pixel_count: usize,
-    shared: &Option<S::Wavelengths>,
+    sets: &WavelengthSource<S>,
 ) -> Vec<LightChunk<S>> {
     (0..pixel_count.div_ceil(LIGHT_CHUNK))
         .into_par_iter()
@@ -732,7 +748,7 @@ fn trace_light_chunks<S: SpectralMode>(
             let end = ((chunk + 1) * LIGHT_CHUNK).min(pixel_count);
             for path in chunk * LIGHT_CHUNK..end {
                 let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
-                let wavelengths = wavelengths_for::<S>(shared, scene, seed, iteration, path as u64);
+                let wavelengths = sets.get(seed, iteration, path as u64);
                 trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats, &wavelengths);
                 ends.push(vertices.len() as u32);
             }
