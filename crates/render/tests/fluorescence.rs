@@ -17,14 +17,14 @@
 
 mod common;
 
-use render::driver::{Budget, Renderer};
+use render::driver::Budget;
 use render::{Algorithm, RenderSettings};
 use scene::Material;
 use scene::texture::Texture;
 use spectrum::Rgb;
 use spectrum::cie::{CIE_Y_INTEGRAL, D65_Y_INTEGRAL, cmf, d65, xyz_to_linear_srgb};
 use spectrum::fluorescence::{Band, Fluorescence};
-use testkit::{MeanVar, sidak, z_test_entries};
+use testkit::{sidak, z_test_entries};
 
 const RHO: f32 = 0.3;
 const EMISSION: f32 = 0.5;
@@ -121,8 +121,9 @@ const MERGING_SPECTRAL: [Run; 3] = [
     Run { algorithm: "bpm", resolution: 32, iterations: 14000, radius_factor: 3e-3 },
 ];
 
-/// Per-channel image means over iterations.
-fn image_means(run: &Run, spectral: bool, max_length: u32, seed: u64) -> [MeanVar; 3] {
+/// Per-channel image means over iterations and their standard errors (the whole image as one
+/// block).
+fn image_means(run: &Run, spectral: bool, max_length: u32, seed: u64) -> common::BlockEstimate {
     let scene = common::furnace_with(EMISSION, material(), run.resolution);
     let settings = RenderSettings {
         algorithm: Algorithm::from_name(run.algorithm).unwrap(),
@@ -133,22 +134,7 @@ fn image_means(run: &Run, spectral: bool, max_length: u32, seed: u64) -> [MeanVa
         spectral,
         ..RenderSettings::default()
     };
-    let mut renderer = Renderer::new(&scene, &settings).unwrap();
-    let mut stats = [MeanVar::new(); 3];
-    let pixels = (run.resolution * run.resolution) as f64;
-    for _ in 0..run.iterations {
-        assert_eq!(renderer.step(), 0, "{}: rejected samples", run.algorithm);
-        let mut sums = [0.0f64; 3];
-        for p in &renderer.frame().pixels {
-            for (s, v) in sums.iter_mut().zip(p.to_array()) {
-                *s += f64::from(v);
-            }
-        }
-        for (stat, sum) in stats.iter_mut().zip(sums) {
-            stat.push(sum / pixels);
-        }
-    }
-    stats
+    common::block_estimate(&scene, &settings, run.iterations, run.resolution)
 }
 
 fn check(spectral: bool, runs: &[Run]) {
@@ -158,9 +144,8 @@ fn check(spectral: bool, runs: &[Run]) {
     for (index, run) in runs.iter().enumerate() {
         let first = if run.algorithm == "lt" { 1 } else { 0 };
         let truth = if spectral { spectral_truth(first, max_length) } else { rgb_truth(first, max_length) };
-        let stats = image_means(run, spectral, max_length, 500 + index as u64);
-        let means: Vec<f64> = stats.iter().map(MeanVar::mean).collect();
-        let errors: Vec<f64> = stats.iter().map(MeanVar::std_error).collect();
+        let common::BlockEstimate { means, std_errors: errors, .. } =
+            image_means(run, spectral, max_length, 500 + index as u64);
         let outcome = z_test_entries(&means, &errors, &truth, &[0.0; 3], alpha);
         let line = format!(
             "{} {}: {:.4?} ± {:.4?} vs exact {:.4?}; {outcome}",
