@@ -7,6 +7,7 @@
 pub mod bounds;
 pub mod distribution;
 pub mod frame;
+pub mod octahedral;
 pub mod pdf;
 pub mod ray;
 pub mod rng;

@@ -183,17 +183,6 @@ impl<'a> Renderer<'a> {
             .num_threads(settings.threads)
             .build()
             .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
-        if let Algorithm::Vcm(algorithm) = settings.algorithm
-            && settings.spectral
-            && settings.memory_efficient
-            && crate::vcm::Techniques::of(algorithm).merge
-        {
-            return Err(format!(
-                "spectral mode cannot use the memory-efficient mode with {}: its merges pair the light vertices \
-                 of one iteration with the camera paths of the next, which are traced at other wavelengths",
-                settings.algorithm.name()
-            ));
-        }
         let integrator = match (settings.algorithm, settings.vcm_settings()) {
             (_, Some(vcm)) => Integrator::Vcm(Box::new(VcmEngine::new(scene, vcm))),
             (Algorithm::EyeLight, _) => Integrator::EyeLight,

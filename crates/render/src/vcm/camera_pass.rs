@@ -9,7 +9,7 @@ use scene::{Bsdf, Scene, TransportMode};
 use spectrum::SpectralMode;
 
 use super::connect::{CameraEnd, connect_vertices, next_event};
-use super::light_vertex::LightVertex;
+use super::light_vertex::LightPath;
 use super::merge::{MergeSource, MergeWeighting, merge};
 use super::mis::{self, SubPathMis};
 use super::subpath::SubPath;
@@ -26,7 +26,7 @@ pub fn trace_camera_path<S: SpectralMode>(
     x: u32,
     y: u32,
     rng: &mut Rng,
-    light_path: &[LightVertex<S>],
+    light_path: LightPath<S>,
     merge_source: Option<&MergeSource<S>>,
     wavelengths: &S::Wavelengths,
 ) -> FamilyValues {
@@ -45,7 +45,7 @@ pub fn trace_camera_path_recorded<S: SpectralMode>(
     x: u32,
     y: u32,
     rng: &mut Rng,
-    light_path: &[LightVertex<S>],
+    light_path: LightPath<S>,
     merge_source: Option<&MergeSource<S>>,
     wavelengths: &S::Wavelengths,
     techniques: Option<TechniqueValues>,
@@ -71,7 +71,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     x: u32,
     y: u32,
     rng: &mut Rng,
-    light_path: &[LightVertex<S>],
+    light_path: LightPath<S>,
     merge_source: Option<&MergeSource<S>>,
     wavelengths: &S::Wavelengths,
     out: &mut R,
@@ -158,12 +158,12 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                 // Next-event estimation (s = 1).
                 out.record(Family::NextEvent, 1, t, next_event(scene, &path, &end, rng, k, w).to_rgb(w));
                 // Connections to the pixel's light sub-path (s, t > 1), stored in path order.
-                for light in light_path {
-                    if u32::from(light.path_length) + 1 + path.path_length > it.max_length {
+                for light in light_path.iter() {
+                    if light.path_length() + 1 + path.path_length > it.max_length {
                         break;
                     }
-                    let value = connect_vertices(scene, &path, &end, light, it.rebase(), k, w, rng);
-                    out.record(Family::Connection, u32::from(light.path_length) + 1, t, value.to_rgb(w));
+                    let value = connect_vertices(scene, &path, &end, light, k, w, rng);
+                    out.record(Family::Connection, light.path_length() + 1, t, value.to_rgb(w));
                 }
             }
             if let Some(source) = merge_source {

@@ -177,15 +177,14 @@ pub fn next_event<S: SpectralMode>(
 }
 
 /// Connects camera vertex `end` to a light vertex (s, t > 1), MIS-weighted (eqs. 40, 41) with
-/// the camera path's constants `k`; `rebase` rebuilds the light vertex's dVC/dVM for them
-/// (eqs. 62, 63). Labels of fluorescent ends are drawn from `rng`.
+/// the camera path's constants `k` (the light vertex's dVC/dVM are rebuilt for them, eqs. 62,
+/// 63). Labels of fluorescent ends are drawn from `rng`.
 #[allow(clippy::too_many_arguments)]
 pub fn connect_vertices<S: SpectralMode>(
     scene: &Scene,
     camera: &SubPath<S>,
     end: &CameraEnd,
     light: &LightVertex<S>,
-    rebase: bool,
     k: &MisConstants,
     wavelengths: &S::Wavelengths,
     rng: &mut Rng,
@@ -206,10 +205,10 @@ pub fn connect_vertices<S: SpectralMode>(
         light_forward_a: light_eval.pdf.forward.0 * light.continuation * camera_eval.cos_generated * inv_d2,
         light_reverse_w: light_eval.pdf.reverse.0 * light.continuation,
     };
-    let light_mis = if rebase { light.mis.for_constants(k) } else { light.mis };
+    let light_mis = light.mis(k);
     let weight = mis::connection_weight(&light_mis, &camera.mis, &pdfs, k);
     let geometry = camera_eval.cos_generated * light_eval.cos_generated * inv_d2;
-    let both_terminated = camera.terminated && light.terminated;
+    let both_terminated = camera.terminated && light.terminated();
     let scale = if both_terminated { S::DOUBLE_TERMINATION } else { 1.0 };
     let light_fluorescent = light.fluorescent(scene);
     if end.fluorescent.is_none() && light_fluorescent.is_none() && camera.slots == S::Slots::default() {

@@ -9,12 +9,20 @@ use crate::fluorescent::FluorescentVertex;
 
 use super::Iteration;
 use super::connect::{LightEnd, Splat, connect_to_camera};
-use super::light_vertex::LightVertex;
+use super::light_vertex::{LightVertex, VertexData};
 use super::mis::SubPathMis;
 use super::subpath::SubPath;
 
+/// Stream selector of the camera connections' generator.
+const CAMERA_CONNECTIONS: u64 = 0x6361_6d65_7261;
+
 /// Traces one light sub-path: appends its stored vertices to `vertices` and its camera
 /// connections to `splats`.
+///
+/// The walk draws from `rng`; the camera connections draw from a generator seeded by the walk's
+/// first two numbers, so the walk (and the stored vertices) are the same whether or not the
+/// iteration's techniques connect to the camera: the memory-efficient mode traces each light
+/// sub-path twice, once for merging without camera connections and once with them.
 pub fn trace_light_path<S: SpectralMode>(
     scene: &Scene,
     it: &Iteration,
@@ -26,6 +34,7 @@ pub fn trace_light_path<S: SpectralMode>(
     let hero = S::hero_wavelength(wavelengths);
     let k = &it.constants;
     let techniques = &it.techniques;
+    let mut camera_rng = Rng::new(u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32()), CAMERA_CONNECTIONS);
     let pick_u = rng.uniform();
     let u_position = rng.uniform2();
     let u_direction = rng.uniform2();
@@ -62,11 +71,11 @@ pub fn trace_light_path<S: SpectralMode>(
 
         if !bsdf.is_delta() {
             if techniques.store_light_vertices() {
-                vertices.push(LightVertex {
+                vertices.push(LightVertex::new(&VertexData {
                     position: hit.position,
                     throughput: path.throughput,
                     mis: path.mis,
-                    path_length: path.path_length.min(u32::from(u16::MAX)) as u16,
+                    path_length: path.path_length,
                     material: hit.material,
                     normal: hit.normal,
                     shading_normal: hit.shading_normal,
@@ -74,11 +83,20 @@ pub fn trace_light_path<S: SpectralMode>(
                     fixed,
                     continuation: bsdf.continuation_probability(),
                     terminated: path.terminated,
-                });
+                }));
             }
             if techniques.connect_to_camera() && path.path_length < it.max_length {
                 let endpoint = LightEnd { bsdf: &bsdf, position: hit.position, fluorescent: fluorescent.as_ref() };
-                connect_to_camera(scene, &path, &endpoint, techniques.connect, it, rng, splats, wavelengths);
+                connect_to_camera(
+                    scene,
+                    &path,
+                    &endpoint,
+                    techniques.connect,
+                    it,
+                    &mut camera_rng,
+                    splats,
+                    wavelengths,
+                );
             }
         }
         // A longer light sub-path could not be connected to any camera vertex.

@@ -1,15 +1,37 @@
-//! Compact storage of light sub-path vertices: a flat `Vec` of vertices plus, per light
-//! sub-path, the index one past its last vertex. A vertex keeps what connections and merges
-//! need — position, throughput, MIS quantities — and the data to rebuild its BSDF (material,
-//! normal, fixed direction), never a full BSDF.
+//! Compact storage of light sub-path vertices: one 64-byte record per vertex (RGB mode; 68 in
+//! spectral mode) that both connections and merging read, in a flat `Vec`, plus per light
+//! sub-path the index one past its last vertex. When merging is on, the records are permuted in
+//! place into the range-search grid's slot order (a merge query then reads neighbouring records
+//! from contiguous memory) and a slot map (4 bytes per vertex) leads a connection from a light
+//! sub-path to its records.
+//!
+//! A record keeps what connections and merges need and the data to rebuild the vertex's BSDF
+//! (material, normals, fixed direction, texture coordinates), never a BSDF. Quantised fields and
+//! their error bounds (docs/architecture.md, "Light vertices"):
+//! - the geometric normal, the shading normal and the fixed direction are octahedral 32-bit codes
+//!   ([`math::octahedral`]): each decoded direction is within 5·10⁻⁵ rad (0.003°) of the exact one;
+//! - the MIS quantities are the radius-free dVCM, cVC, cVM (§6.1, eqs. 57–61); dVC and dVM are
+//!   rebuilt for the iteration's constants by eqs. 62–63 ([`SubPathMis::for_constants`]), which is
+//!   exact algebra (the recursion is linear), so only float rounding differs;
+//! - material index (21 bits), path length (10 bits) and the termination flag share one word.
+//!
+//! Everything else (position, throughput, texture coordinates, continuation probability) is
+//! stored at full `f32` precision.
 
-use math::{Vec2, Vec3};
+use math::{Vec2, Vec3, octahedral};
 use scene::{Bsdf, Scene, ShadingPoint, TransportMode};
 use spectrum::{Rgb, SpectralMode};
 
-use super::mis::SubPathMis;
+use super::mis::{MisConstants, SubPathMis};
 
-/// A stored light sub-path vertex (100 bytes in RGB mode, 104 in spectral mode).
+/// Largest material index a light vertex can store (2²¹ − 1).
+pub const MAX_MATERIAL: u32 = (1 << 21) - 1;
+
+/// Largest path length a light vertex can store (2¹⁰ − 1 segments).
+pub const MAX_PATH_LENGTH: u32 = (1 << 10) - 1;
+
+/// A stored light sub-path vertex: 64 bytes in RGB mode, 68 in spectral mode (four wavelengths
+/// of throughput instead of three channels).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightVertex<S: SpectralMode = Rgb> {
     /// Position on the surface.
@@ -17,12 +39,35 @@ pub struct LightVertex<S: SpectralMode = Rgb> {
     /// Throughput of the light sub-path up to this vertex (emitted energy / pdfs, BSDFs and
     /// cosines of the earlier vertices).
     pub throughput: S,
-    /// MIS quantities at this vertex.
+    /// dVCM, cVC, cVM at this vertex.
+    d_vcm: f32,
+    c_vc: f32,
+    c_vm: f32,
+    /// Octahedral codes of the fixed direction (towards the previous vertex), the geometric
+    /// and the shading normal.
+    fixed: u32,
+    normal: u32,
+    shading_normal: u32,
+    /// Texture coordinates.
+    pub uv: Vec2,
+    /// Material (bits 0–20), path length (bits 21–30), termination flag (bit 31).
+    packed: u32,
+    /// Russian-roulette continuation probability of the vertex's BSDF.
+    pub continuation: f32,
+}
+
+/// What the light pass knows of a vertex it stores.
+#[derive(Clone, Copy, Debug)]
+pub struct VertexData<S> {
+    /// Position on the surface.
+    pub position: Vec3,
+    /// Throughput of the light sub-path up to the vertex.
+    pub throughput: S,
+    /// MIS quantities at the vertex (only dVCM, cVC and cVM are kept).
     pub mis: SubPathMis,
-    /// Segments from the light to this vertex (`u16` keeps the vertex at 100 bytes and the
-    /// merging data at 64 with the termination flag; light sub-paths end long before).
-    pub path_length: u16,
-    /// Material index, to rebuild the BSDF.
+    /// Segments from the light to the vertex (clamped to [`MAX_PATH_LENGTH`]).
+    pub path_length: u32,
+    /// Material index (at most [`MAX_MATERIAL`]; the driver checks scenes).
     pub material: u32,
     /// Geometric normal.
     pub normal: Vec3,
@@ -34,90 +79,311 @@ pub struct LightVertex<S: SpectralMode = Rgb> {
     pub fixed: Vec3,
     /// Russian-roulette continuation probability of the vertex's BSDF.
     pub continuation: f32,
-    /// The light sub-path kept only its hero wavelength ([`super::subpath::SubPath::terminated`]).
+    /// The light sub-path kept only its hero wavelength.
     pub terminated: bool,
 }
 
 impl<S: SpectralMode> LightVertex<S> {
+    /// Packs `data` into a record.
+    #[inline]
+    pub fn new(data: &VertexData<S>) -> Self {
+        let packed = data.material.min(MAX_MATERIAL)
+            | data.path_length.min(MAX_PATH_LENGTH) << 21
+            | u32::from(data.terminated) << 31;
+        Self {
+            position: data.position,
+            throughput: data.throughput,
+            d_vcm: data.mis.d_vcm,
+            c_vc: data.mis.c_vc,
+            c_vm: data.mis.c_vm,
+            fixed: octahedral::encode(data.fixed),
+            normal: octahedral::encode(data.normal),
+            shading_normal: octahedral::encode(data.shading_normal),
+            uv: data.uv,
+            packed,
+            continuation: data.continuation,
+        }
+    }
+
+    /// The MIS quantities for the constants `k` (dVC and dVM rebuilt by eqs. 62, 63).
+    #[inline]
+    pub fn mis(&self, k: &MisConstants) -> SubPathMis {
+        SubPathMis { d_vcm: self.d_vcm, d_vc: 0.0, d_vm: 0.0, c_vc: self.c_vc, c_vm: self.c_vm }.for_constants(k)
+    }
+
+    /// Unit direction towards the previous vertex (decoded).
+    #[inline]
+    pub fn fixed(&self) -> Vec3 {
+        octahedral::decode(self.fixed)
+    }
+
+    /// Segments from the light to this vertex.
+    #[inline]
+    pub fn path_length(&self) -> u32 {
+        (self.packed >> 21) & MAX_PATH_LENGTH
+    }
+
+    /// Material index.
+    #[inline]
+    pub fn material(&self) -> u32 {
+        self.packed & MAX_MATERIAL
+    }
+
+    /// The light sub-path kept only its hero wavelength ([`super::subpath::SubPath::terminated`]).
+    #[inline]
+    pub fn terminated(&self) -> bool {
+        self.packed >> 31 != 0
+    }
+
     /// Rebuilds the vertex's BSDF (importance transport) at the hero wavelength `hero`.
     #[inline]
     pub fn bsdf(&self, scene: &Scene, hero: Option<f32>) -> Option<Bsdf> {
-        let point = ShadingPoint { geometric_normal: self.normal, shading_normal: self.shading_normal, uv: self.uv };
-        Bsdf::new_at(&scene.materials[self.material as usize], &point, self.fixed, TransportMode::Importance, hero)
+        let point = ShadingPoint {
+            geometric_normal: octahedral::decode(self.normal),
+            shading_normal: octahedral::decode(self.shading_normal),
+            uv: self.uv,
+        };
+        Bsdf::new_at(&scene.materials[self.material() as usize], &point, self.fixed(), TransportMode::Importance, hero)
     }
 
     /// The vertex's fluorescence, if its material is fluorescent.
     #[inline]
     pub fn fluorescent<'s>(&self, scene: &'s Scene) -> Option<crate::fluorescent::FluorescentVertex<'s>> {
-        crate::fluorescent::FluorescentVertex::at(&scene.materials[self.material as usize], self.uv)
+        crate::fluorescent::FluorescentVertex::at(&scene.materials[self.material() as usize], self.uv)
+    }
+}
+
+/// What merging reads of a stored light vertex, from a full record ([`LightVertex`]) or a
+/// merging-only one ([`MergeRecord`]).
+pub trait MergeData<S: SpectralMode>: Copy + Send + Sync {
+    /// Position on the surface.
+    fn position(&self) -> Vec3;
+    /// Throughput of the light sub-path up to the vertex.
+    fn throughput(&self) -> S;
+    /// The MIS quantities for the constants `k` (dVC and dVM rebuilt by eqs. 62, 63).
+    fn mis(&self, k: &MisConstants) -> SubPathMis;
+    /// Unit direction towards the previous vertex.
+    fn fixed(&self) -> Vec3;
+    /// Segments from the light to the vertex.
+    fn path_length(&self) -> u32;
+    /// The light sub-path kept only its hero wavelength.
+    fn terminated(&self) -> bool;
+    /// Russian-roulette continuation probability of the vertex's BSDF.
+    fn continuation(&self) -> f32;
+}
+
+impl<S: SpectralMode> MergeData<S> for LightVertex<S> {
+    #[inline]
+    fn position(&self) -> Vec3 {
+        self.position
+    }
+    #[inline]
+    fn throughput(&self) -> S {
+        self.throughput
+    }
+    #[inline]
+    fn mis(&self, k: &MisConstants) -> SubPathMis {
+        LightVertex::mis(self, k)
+    }
+    #[inline]
+    fn fixed(&self) -> Vec3 {
+        LightVertex::fixed(self)
+    }
+    #[inline]
+    fn path_length(&self) -> u32 {
+        LightVertex::path_length(self)
+    }
+    #[inline]
+    fn terminated(&self) -> bool {
+        LightVertex::terminated(self)
+    }
+    #[inline]
+    fn continuation(&self) -> f32 {
+        self.continuation
+    }
+}
+
+/// The merging-only record of the memory-efficient mode: 48 bytes in RGB mode, 52 in spectral
+/// mode. It drops what only connections need (material, normals, texture coordinates): that
+/// mode connects to a light sub-path traced again right before the camera path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MergeRecord<S: SpectralMode = Rgb> {
+    position: Vec3,
+    throughput: S,
+    d_vcm: f32,
+    c_vc: f32,
+    c_vm: f32,
+    /// Octahedral code of the fixed direction.
+    fixed: u32,
+    /// Path length (bits 21–30) and termination flag (bit 31), as in [`LightVertex`].
+    packed: u32,
+    continuation: f32,
+}
+
+impl<S: SpectralMode> From<&LightVertex<S>> for MergeRecord<S> {
+    #[inline]
+    fn from(v: &LightVertex<S>) -> Self {
+        Self {
+            position: v.position,
+            throughput: v.throughput,
+            d_vcm: v.d_vcm,
+            c_vc: v.c_vc,
+            c_vm: v.c_vm,
+            fixed: v.fixed,
+            packed: v.packed & !MAX_MATERIAL,
+            continuation: v.continuation,
+        }
+    }
+}
+
+impl<S: SpectralMode> MergeData<S> for MergeRecord<S> {
+    #[inline]
+    fn position(&self) -> Vec3 {
+        self.position
+    }
+    #[inline]
+    fn throughput(&self) -> S {
+        self.throughput
+    }
+    #[inline]
+    fn mis(&self, k: &MisConstants) -> SubPathMis {
+        SubPathMis { d_vcm: self.d_vcm, d_vc: 0.0, d_vm: 0.0, c_vc: self.c_vc, c_vm: self.c_vm }.for_constants(k)
+    }
+    #[inline]
+    fn fixed(&self) -> Vec3 {
+        octahedral::decode(self.fixed)
+    }
+    #[inline]
+    fn path_length(&self) -> u32 {
+        (self.packed >> 21) & MAX_PATH_LENGTH
+    }
+    #[inline]
+    fn terminated(&self) -> bool {
+        self.packed >> 31 != 0
+    }
+    #[inline]
+    fn continuation(&self) -> f32 {
+        self.continuation
+    }
+}
+
+/// The vertices of one light sub-path, wherever they are stored.
+#[derive(Clone, Copy, Debug)]
+pub enum LightPath<'a, S: SpectralMode = Rgb> {
+    /// Contiguous, in path order.
+    Contiguous(&'a [LightVertex<S>]),
+    /// Scattered over the store (grid slot order): the path's slots, in path order.
+    Slots(&'a [LightVertex<S>], &'a [u32]),
+}
+
+impl<'a, S: SpectralMode> LightPath<'a, S> {
+    /// The vertices in path order.
+    #[inline]
+    pub fn iter(self) -> LightPathIter<'a, S> {
+        LightPathIter { path: self, next: 0 }
+    }
+}
+
+/// Iterator over the vertices of a [`LightPath`], in path order.
+pub struct LightPathIter<'a, S: SpectralMode> {
+    path: LightPath<'a, S>,
+    next: usize,
+}
+
+impl<'a, S: SpectralMode> Iterator for LightPathIter<'a, S> {
+    type Item = &'a LightVertex<S>;
+
+    #[inline]
+    fn next(&mut self) -> Option<Self::Item> {
+        let vertex = match self.path {
+            LightPath::Contiguous(vertices) => vertices.get(self.next),
+            LightPath::Slots(vertices, slots) => slots.get(self.next).map(|&slot| &vertices[slot as usize]),
+        };
+        self.next += 1;
+        vertex
     }
 }
 
 /// All light vertices of one iteration, grouped by light sub-path.
 #[derive(Clone, Debug)]
 pub struct LightVertexStore<S: SpectralMode = Rgb> {
-    /// The vertices, light sub-path after light sub-path, each in path order.
+    /// The vertices: light sub-path after light sub-path in path order, or, after
+    /// [`LightVertexStore::permute_to_slots`], in the grid's slot order.
     pub vertices: Vec<LightVertex<S>>,
-    /// For light sub-path `p`, the index one past its last vertex.
+    /// For light sub-path `p`, the index one past its last vertex in path order.
     pub path_ends: Vec<u32>,
+    /// Slot of the vertex of path-order index `i` (empty while the store is in path order).
+    slots: Vec<u32>,
 }
 
 impl<S: SpectralMode> Default for LightVertexStore<S> {
     fn default() -> Self {
-        Self { vertices: Vec::new(), path_ends: Vec::new() }
+        Self { vertices: Vec::new(), path_ends: Vec::new(), slots: Vec::new() }
     }
 }
 
 impl<S: SpectralMode> LightVertexStore<S> {
     /// The vertices of light sub-path `path`.
     #[inline]
-    pub fn path(&self, path: usize) -> &[LightVertex<S>] {
+    pub fn path(&self, path: usize) -> LightPath<'_, S> {
         let start = if path == 0 { 0 } else { self.path_ends[path - 1] as usize };
-        &self.vertices[start..self.path_ends[path] as usize]
+        let end = self.path_ends[path] as usize;
+        if self.slots.is_empty() {
+            LightPath::Contiguous(&self.vertices[start..end])
+        } else {
+            LightPath::Slots(&self.vertices, &self.slots[start..end])
+        }
     }
 
     /// Empties the store, keeping its allocations.
     pub fn clear(&mut self) {
         self.vertices.clear();
         self.path_ends.clear();
+        self.slots.clear();
     }
 
-    /// Bytes per stored vertex.
+    /// Moves the vertices into slot order in place: the vertex of path-order index
+    /// `order[s]` goes to slot `s` (`order` is the grid's sorted index list, which may omit
+    /// vertices it could not index; those take the slots after it, in path order). Keeps the
+    /// slot map for [`LightVertexStore::path`]. Costs 4 bytes per vertex and no second copy.
+    pub fn permute_to_slots(&mut self, order: &[u32]) {
+        slot_map(self.vertices.len(), order, &mut self.slots);
+        permute(&mut self.vertices, &self.slots);
+    }
+
+    /// Bytes per stored vertex (the record; the slot map adds 4 when merging).
     pub const BYTES_PER_VERTEX: usize = std::mem::size_of::<LightVertex<S>>();
 }
 
-/// What merging needs of a light vertex (64 bytes), stored in the range-search grid's slot
-/// order so that a query reads neighbouring vertices from contiguous memory. In the
-/// memory-efficient mode this is all that is kept of a light vertex.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MergeVertex<S: SpectralMode = Rgb> {
-    /// Position on the surface.
-    pub position: Vec3,
-    /// Unit direction towards the previous vertex.
-    pub fixed: Vec3,
-    /// Throughput of the light sub-path up to this vertex.
-    pub throughput: S,
-    /// MIS quantities at this vertex.
-    pub mis: SubPathMis,
-    /// Segments from the light to this vertex (`u16` keeps the vertex at 100 bytes and the
-    /// merging data at 64 with the termination flag; light sub-paths end long before).
-    pub path_length: u16,
-    /// Russian-roulette continuation probability of the vertex's BSDF.
-    pub continuation: f32,
-    /// The light sub-path kept only its hero wavelength.
-    pub terminated: bool,
+/// Fills `slots` with the slot of each of `n` items given the grid order `order` (item
+/// `order[s]` goes to slot `s`; items missing from `order` take the slots after it, in order).
+pub fn slot_map(n: usize, order: &[u32], slots: &mut Vec<u32>) {
+    slots.clear();
+    slots.resize(n, u32::MAX);
+    for (slot, &index) in order.iter().enumerate() {
+        slots[index as usize] = slot as u32;
+    }
+    let unindexed = slots.iter_mut().filter(|s| **s == u32::MAX);
+    for (next, slot) in (order.len() as u32..).zip(unindexed) {
+        *slot = next;
+    }
 }
 
-impl<S: SpectralMode> From<&LightVertex<S>> for MergeVertex<S> {
-    fn from(v: &LightVertex<S>) -> Self {
-        Self {
-            position: v.position,
-            fixed: v.fixed,
-            throughput: v.throughput,
-            mis: v.mis,
-            path_length: v.path_length,
-            continuation: v.continuation,
-            terminated: v.terminated,
+/// Moves item `i` of `items` to position `slots[i]`, in place (`slots` is a permutation).
+pub fn permute<T>(items: &mut [T], slots: &[u32]) {
+    // Cycle-leader walk: position `start` holds the item of index `index`, not yet in its slot;
+    // swapping it there brings item `target` (untouched so far in this cycle) to `start`.
+    let mut placed = vec![false; items.len()];
+    for start in 0..items.len() {
+        let mut index = start;
+        while !placed[index] {
+            placed[index] = true;
+            let target = slots[index] as usize;
+            if target == start {
+                break;
+            }
+            items.swap(start, target);
+            index = target;
         }
     }
 }
@@ -130,9 +396,66 @@ mod tests {
     #[test]
     fn stored_vertices_keep_their_sizes() {
         // The memory estimates and the documentation quote these sizes.
-        assert_eq!(std::mem::size_of::<LightVertex<Rgb>>(), 100);
-        assert_eq!(std::mem::size_of::<MergeVertex<Rgb>>(), 64);
-        assert_eq!(std::mem::size_of::<LightVertex<Hero4>>(), 104);
-        assert_eq!(std::mem::size_of::<MergeVertex<Hero4>>(), 68);
+        assert_eq!(std::mem::size_of::<LightVertex<Rgb>>(), 64);
+        assert_eq!(std::mem::size_of::<LightVertex<Hero4>>(), 68);
+    }
+
+    fn data(i: u32) -> VertexData<Rgb> {
+        let f = i as f32;
+        VertexData {
+            position: Vec3::new(f, -f, 0.5 * f),
+            throughput: Rgb::new(1.0 + f, 2.0, 3.0),
+            mis: SubPathMis { d_vcm: 0.25 + f, d_vc: 7.0, d_vm: 8.0, c_vc: 1.5 * f, c_vm: 2.5 },
+            path_length: 1 + i % 9,
+            material: i * 1000,
+            normal: Vec3::new(0.3, -0.4, 0.866).normalize(),
+            shading_normal: Vec3::new(0.2, -0.5, 0.8).normalize(),
+            uv: Vec2::new(0.1 * f, 12.5),
+            fixed: Vec3::new(-0.6, 0.0, 0.8),
+            continuation: 0.75,
+            terminated: i % 2 == 1,
+        }
+    }
+
+    #[test]
+    fn records_keep_what_they_store() {
+        let k = MisConstants::new(1000, 0.01, true, true);
+        for i in 0..20 {
+            let d = data(i);
+            let v = LightVertex::new(&d);
+            assert_eq!((v.position, v.throughput, v.uv, v.continuation), (d.position, d.throughput, d.uv, 0.75));
+            assert_eq!((v.material(), v.path_length(), v.terminated()), (d.material, d.path_length, d.terminated));
+            assert!(v.fixed().angle_between(d.fixed) < octahedral::MAX_ANGULAR_ERROR);
+            // dVC, dVM come back from cVC, cVM for any constants (eqs. 62, 63).
+            let mis = v.mis(&k);
+            assert_eq!(mis, d.mis.for_constants(&k));
+            assert_eq!((mis.d_vcm, mis.c_vc, mis.c_vm), (d.mis.d_vcm, d.mis.c_vc, d.mis.c_vm));
+        }
+        // Out-of-range fields saturate instead of spilling into their neighbours.
+        let d = VertexData { material: u32::MAX, path_length: 5000, terminated: false, ..data(1) };
+        let v = LightVertex::new(&d);
+        assert_eq!((v.material(), v.path_length(), v.terminated()), (MAX_MATERIAL, MAX_PATH_LENGTH, false));
+    }
+
+    #[test]
+    fn permuting_into_slots_keeps_every_path() {
+        let mut store = LightVertexStore::<Rgb>::default();
+        // Three paths of 3, 0 and 4 vertices.
+        for i in 0..7 {
+            store.vertices.push(LightVertex::new(&data(i)));
+        }
+        store.path_ends = vec![3, 3, 7];
+        let before: Vec<Vec<LightVertex>> = (0..3).map(|p| store.path(p).iter().copied().collect()).collect();
+        // A grid order that leaves out index 4 (it then takes the last slot).
+        let order = [5u32, 0, 6, 2, 1, 3];
+        let original = store.vertices.clone();
+        store.permute_to_slots(&order);
+        for (slot, &index) in order.iter().enumerate() {
+            assert_eq!(store.vertices[slot], original[index as usize]);
+        }
+        assert_eq!(store.vertices[6], original[4]);
+        let after: Vec<Vec<LightVertex>> = (0..3).map(|p| store.path(p).iter().copied().collect()).collect();
+        assert_eq!(before, after);
+        assert_eq!(after[1].len(), 0);
     }
 }

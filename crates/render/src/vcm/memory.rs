@@ -1,43 +1,70 @@
-//! Memory estimate of the engine's per-iteration buffers, made before the first iteration so
-//! that a render too large for the machine can switch to the memory-efficient mode (§6.2) or
-//! stop with a clear message instead of being killed by the operating system.
+//! Memory estimate of a render's buffers, made before the first iteration so that a render
+//! too large for the machine can stop with a clear message (or switch to the memory-efficient
+//! mode where that is smaller) instead of being killed by the operating system.
 //!
-//! The number of stored light vertices is random; a pilot traces [`PILOT_PATHS`] light sub-paths
-//! of iteration 0 (the same random streams the render will use) and scales their mean vertex
-//! count to one sub-path per pixel.
+//! The estimate is a sum of the buffers the driver and the engine hold at the peak of an
+//! iteration, each from the size of its element type (docs/performance.md, "Memory", compares it
+//! with the measured peak resident memory of every algorithm). It does not include what the
+//! process holds before rendering (the program, the scene and its BVH): the caller adds that.
+//!
+//! The numbers of stored light vertices and of light-tracing splats are random; a pilot traces
+//! [`PILOT_PATHS`] light sub-paths of iteration 0 (the same random streams the render will
+//! use) and scales their mean counts to one sub-path per pixel.
 
 use math::Rng;
 use scene::Scene;
 use spectrum::{Hero4, Rgb};
 
+use super::connect::Splat;
 use super::light_pass::trace_light_path;
-use super::light_vertex::{LightVertex, MergeVertex};
+use super::light_vertex::{LightVertex, MergeRecord};
 use super::mis::MisConstants;
 use super::{Iteration, LIGHT_STREAM, Techniques, VcmSettings};
 
 /// Light sub-paths traced by the pilot.
 pub const PILOT_PATHS: usize = 4096;
 
-/// Bytes of the range-search grid per light vertex: the position copy it is built from (12)
-/// and its index permutation (4).
-const GRID_BYTES_PER_VERTEX: usize = 16;
+/// Bytes per pixel the driver holds whatever the algorithm: the film's sums and sums of squares
+/// (2 × 3 × f64), the iteration's frame and the family frame (2 × 3 × f32).
+pub const FILM_BYTES_PER_PIXEL: usize = 72;
+
+/// Bytes per pixel of the engine: the light sub-paths' end indices (u32).
+const ENGINE_BYTES_PER_PIXEL: usize = 4;
+
+/// Bytes per pixel of the per-pixel radius mode: footprints and radii (2 × f32).
+const PER_PIXEL_RADIUS_BYTES: usize = 8;
+
+/// Bytes of the range-search grid per indexed vertex, kept between iterations: sorted indices
+/// (4), sorted positions (12), and the build's scratch: keys (4), (bucket, index) pairs (8) and
+/// their positions (12). The bucket starts (4 per bucket, one bucket per vertex rounded up to a
+/// power of two) come on top.
+const GRID_BYTES_PER_VERTEX: usize = 40;
+
+/// Bytes per vertex alive only while the grid is built (the positions it is built from, 12)
+/// or while the vertices are permuted into its order (the slot map is counted apart; the
+/// "placed" flags, 1).
+const GRID_BUILD_BYTES_PER_VERTEX: usize = 12;
+
+/// Bytes of the slot map that leads connections to vertices stored in grid order (u32).
+const SLOT_BYTES_PER_VERTEX: usize = 4;
 
 /// The estimate for one scene, resolution and algorithm.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MemoryEstimate {
     /// Mean stored light vertices per light sub-path in the pilot.
     pub vertices_per_path: f64,
+    /// Mean light-tracing splats per light sub-path in the pilot.
+    pub splats_per_path: f64,
     /// Light sub-paths per iteration (one per pixel).
     pub light_paths: usize,
-    /// Peak bytes of the two-stage mode: light vertices in the tracing chunks and in the store
-    /// (both alive while the store is filled), the merging copy and the grid.
+    /// Peak bytes of the render in the two-stage mode (film and frames included, the process's
+    /// program and scene not).
     pub two_stage_bytes: u64,
-    /// Peak bytes of the memory-efficient mode: the previous and the current iteration's
-    /// merging data, the grid, and one image row of full light vertices per thread (small).
+    /// Peak bytes of the render in the memory-efficient mode, likewise.
     pub memory_efficient_bytes: u64,
 }
 
-/// Estimates the buffers of the VCM engine for `scene` with `settings` and `seed` (the pilot's
+/// Estimates the peak buffers of a render of `scene` with `settings` and `seed` (the pilot's
 /// random streams are those of the render's first iteration).
 pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstimate {
     let light_paths = scene.camera.pixel_count();
@@ -53,47 +80,87 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
     let pilot = light_paths.clamp(1, PILOT_PATHS);
     let mut vertices = Vec::new();
     let mut splats = Vec::new();
-    let mut stored = 0usize;
+    let (mut stored, mut splatted) = (0usize, 0usize);
     for path in 0..pilot {
         let mut rng = Rng::for_stream(seed, 0, LIGHT_STREAM | path as u64);
         // The vertex count does not depend on the spectral mode (sampling decisions use RGB
         // values in both), so the pilot traces in RGB.
         trace_light_path::<Rgb>(scene, &it, &mut rng, &mut vertices, &mut splats, &());
         stored += vertices.len();
+        splatted += splats.len();
         vertices.clear();
         splats.clear();
     }
     let vertices_per_path = stored as f64 / pilot as f64;
-    let total_vertices = vertices_per_path * light_paths as f64;
-    let (full, merge) = vertex_sizes(settings);
-    let merge = if techniques.merge { merge + GRID_BYTES_PER_VERTEX } else { 0 };
-    let two_stage = total_vertices * (2 * full + merge) as f64;
-    let memory_efficient = total_vertices * (2 * merge) as f64;
+    let splats_per_path = splatted as f64 / pilot as f64;
+    let counts = Counts {
+        pixels: light_paths as f64,
+        vertices: vertices_per_path * light_paths as f64,
+        splats: splats_per_path * light_paths as f64,
+    };
     MemoryEstimate {
         vertices_per_path,
+        splats_per_path,
         light_paths,
-        two_stage_bytes: two_stage.ceil() as u64,
-        memory_efficient_bytes: memory_efficient.ceil() as u64,
+        two_stage_bytes: peak_bytes(&counts, settings, false),
+        memory_efficient_bytes: peak_bytes(&counts, settings, true),
     }
+}
+
+/// Bytes the driver holds for a render of `pixel_count` pixels whatever the algorithm (the
+/// whole estimate of the path tracer and the eye light).
+pub fn driver_bytes(pixel_count: usize) -> u64 {
+    (pixel_count * FILM_BYTES_PER_PIXEL) as u64
 }
 
 /// An upper bound of [`MemoryEstimate::two_stage_bytes`] without a pilot: every light sub-path
-/// stores at most `max_length − 1` vertices. When it fits, the pilot is not needed.
+/// stores at most `max_length − 1` vertices and makes at most one splat per vertex. When it
+/// fits, the pilot is not needed.
 pub fn upper_bound(scene: &Scene, settings: &VcmSettings) -> u64 {
-    let techniques = Techniques::of(settings.algorithm);
-    let (full, merge) = vertex_sizes(settings);
-    let merge = if techniques.merge { merge + GRID_BYTES_PER_VERTEX } else { 0 };
-    let per_vertex = (2 * full + merge) as u64;
-    scene.camera.pixel_count() as u64 * u64::from(settings.max_length.saturating_sub(1)) * per_vertex
+    let pixels = scene.camera.pixel_count() as f64;
+    let per_path = f64::from(settings.max_length.saturating_sub(1));
+    let counts = Counts { pixels, vertices: pixels * per_path, splats: pixels * per_path };
+    peak_bytes(&counts, settings, false).max(peak_bytes(&counts, settings, true))
 }
 
-/// Bytes of a stored light vertex and of its merging copy in the settings' spectral mode.
-fn vertex_sizes(settings: &VcmSettings) -> (usize, usize) {
-    if settings.spectral {
-        (std::mem::size_of::<LightVertex<Hero4>>(), std::mem::size_of::<MergeVertex<Hero4>>())
+/// Expected numbers of pixels, stored light vertices and splats of one iteration.
+struct Counts {
+    pixels: f64,
+    vertices: f64,
+    splats: f64,
+}
+
+/// The peak of the buffers of one iteration for `counts`.
+fn peak_bytes(counts: &Counts, settings: &VcmSettings, memory_efficient: bool) -> u64 {
+    let techniques = Techniques::of(settings.algorithm);
+    let (vertex, record) = if settings.spectral {
+        (std::mem::size_of::<LightVertex<Hero4>>(), std::mem::size_of::<MergeRecord<Hero4>>())
     } else {
-        (std::mem::size_of::<LightVertex<Rgb>>(), std::mem::size_of::<MergeVertex<Rgb>>())
+        (std::mem::size_of::<LightVertex<Rgb>>(), std::mem::size_of::<MergeRecord<Rgb>>())
+    };
+    let mut per_pixel = (FILM_BYTES_PER_PIXEL + ENGINE_BYTES_PER_PIXEL) as f64;
+    if settings.radius_mode == super::RadiusMode::PerPixel {
+        per_pixel += PER_PIXEL_RADIUS_BYTES as f64;
     }
+    let splats = counts.splats * std::mem::size_of::<Splat>() as f64;
+    let stored = techniques.store_light_vertices();
+    let grid = if techniques.merge {
+        let buckets = (counts.vertices.max(1.0) as u64).next_power_of_two() as f64;
+        counts.vertices * (GRID_BYTES_PER_VERTEX + SLOT_BYTES_PER_VERTEX + GRID_BUILD_BYTES_PER_VERTEX) as f64
+            + 4.0 * buckets
+    } else {
+        0.0
+    };
+    let vertices = if !stored {
+        0.0
+    } else if memory_efficient {
+        // Merging-only records (none without merging): connections use a light sub-path
+        // traced again right before each camera path.
+        if techniques.merge { counts.vertices * record as f64 } else { 0.0 }
+    } else {
+        counts.vertices * vertex as f64
+    };
+    (counts.pixels * per_pixel + splats + vertices + grid).ceil() as u64
 }
 
 /// Physical memory of the machine in bytes (Linux: `MemTotal` of `/proc/meminfo`), if known.
@@ -166,7 +233,6 @@ mod tests {
         let predicted = e.vertices_per_path * e.light_paths as f64;
         // 4096 pilot paths = the whole 64×64 image: the same streams, the same count.
         assert_eq!(predicted, actual);
-        assert!(e.two_stage_bytes > e.memory_efficient_bytes);
         assert!(upper_bound(&scene, &settings) >= e.two_stage_bytes);
         assert!(physical_memory().is_none_or(|m| m > 1 << 20));
     }

@@ -6,7 +6,7 @@ use scene::Bsdf;
 use spectrum::{Rgb, SpectralMode};
 
 use super::connect::CameraEnd;
-use super::light_vertex::MergeVertex;
+use super::light_vertex::{LightVertex, MergeData, MergeRecord};
 use super::mis::{self, MisConstants};
 use super::subpath::SubPath;
 use super::technique_images::Record;
@@ -23,16 +23,23 @@ pub enum MergeWeighting {
     None,
 }
 
+/// Stored light vertices in the grid's slot order: full records (two-stage mode) or
+/// merging-only ones (memory-efficient mode).
+#[derive(Clone, Copy)]
+pub enum MergeVertices<'a, S: SpectralMode = Rgb> {
+    /// Full records, also read by connections.
+    Full(&'a [LightVertex<S>]),
+    /// Merging-only records.
+    Compact(&'a [MergeRecord<S>]),
+}
+
 /// The light vertices a camera vertex merges with.
 #[derive(Clone, Copy)]
 pub struct MergeSource<'a, S: SpectralMode = Rgb> {
     /// Vertices in the grid's slot order.
-    pub vertices: &'a [MergeVertex<S>],
+    pub vertices: MergeVertices<'a, S>,
     /// The range-search structure over them.
     pub grid: &'a HashGrid,
-    /// The vertices' dVC/dVM were computed for other constants (another radius or iteration):
-    /// rebuild them from cVC/cVM (eqs. 62, 63).
-    pub rebase: bool,
 }
 
 /// The merged contribution at camera vertex `position` within `radius` (throughput and kernel
@@ -52,40 +59,66 @@ pub fn merge<S: SpectralMode, R: Record>(
     rng: &mut Rng,
     out: &mut R,
 ) -> S {
+    let args = (camera, end, source.grid, radius, max_length, weighting, k, wavelengths);
+    match source.vertices {
+        MergeVertices::Full(vertices) => merge_with(vertices, args, rng, out),
+        MergeVertices::Compact(vertices) => merge_with(vertices, args, rng, out),
+    }
+}
+
+/// The arguments of [`merge`] that [`merge_with`] passes through.
+type MergeArgs<'a, 'b, S> = (
+    &'a SubPath<S>,
+    &'a CameraEnd<'b>,
+    &'a HashGrid,
+    f32,
+    u32,
+    MergeWeighting,
+    &'a MisConstants,
+    &'a <S as SpectralMode>::Wavelengths,
+);
+
+/// [`merge`] over one kind of stored record.
+fn merge_with<S: SpectralMode, R: Record, V: MergeData<S>>(
+    vertices: &[V],
+    (camera, end, grid, radius, max_length, weighting, k, wavelengths): MergeArgs<S>,
+    rng: &mut Rng,
+    out: &mut R,
+) -> S {
     let (bsdf, position): (&Bsdf, Vec3) = (end.bsdf, end.position);
     // One label for the camera vertex, shared by all its merges.
     let label = end.fluorescent.map(|f| (f, f.sample_label::<S>(rng.uniform())));
     let continuation = bsdf.continuation_probability();
     let mut sum = S::default();
-    source.grid.for_each_slot_within(position, radius, |slot| {
-        let light = &source.vertices[slot];
+    grid.for_each_slot_within(position, radius, |slot| {
+        let light = &vertices[slot];
         // A merged path is one segment shorter than a connected one.
-        if u32::from(light.path_length) + camera.path_length > max_length {
+        if light.path_length() + camera.path_length > max_length {
             return;
         }
-        let Some(eval) = bsdf.evaluate(light.fixed) else { return };
+        let Some(eval) = bsdf.evaluate(light.fixed()) else { return };
         let weight = match weighting {
             MergeWeighting::None => 1.0,
             MergeWeighting::Mis => {
-                let light_mis = if source.rebase { light.mis.for_constants(k) } else { light.mis };
+                let light_mis = light.mis(k);
                 // The reverse density belongs to the camera BSDF, but the light sub-path's
                 // Russian roulette would have governed it.
                 let forward = eval.pdf.forward.0 * continuation;
-                let reverse = eval.pdf.reverse.0 * light.continuation;
+                let reverse = eval.pdf.reverse.0 * light.continuation();
                 mis::merge_weight(&light_mis, &camera.mis, forward, reverse, k)
             }
         };
-        let weight = if camera.terminated && light.terminated { weight * S::DOUBLE_TERMINATION } else { weight };
+        let weight = if camera.terminated && light.terminated() { weight * S::DOUBLE_TERMINATION } else { weight };
         let scattered = match label {
-            None => S::from_reflectance(wavelengths, eval.value) * light.throughput,
-            Some((f, label)) => f.apply_slots(wavelengths, label, eval.value, light.throughput),
+            None => S::from_reflectance(wavelengths, eval.value) * light.throughput(),
+            Some((f, label)) => f.apply_slots(wavelengths, label, eval.value, light.throughput()),
         };
         let part = scattered * weight;
         sum += part;
         if R::PER_TECHNIQUE {
             let t = camera.path_length + 1;
             let value = camera.throughput * view(&camera.slots, part) * k.vm_normalization;
-            out.stage_merge(u32::from(light.path_length) + 1, t, value.to_rgb(wavelengths));
+            out.stage_merge(light.path_length() + 1, t, value.to_rgb(wavelengths));
         }
     });
     camera.throughput * view(&camera.slots, sum) * k.vm_normalization

@@ -45,8 +45,9 @@ impl MisConstants {
 ///
 /// `d_vcm`, `d_vc`, `d_vm` are the report's quantities for the iteration's global radius.
 /// `c_vc`, `c_vm` are the radius-independent quantities of §6.1 (eqs. 57–61), carried
-/// alongside so that a vertex can be weighted for another radius (per-pixel radius, or merging
-/// against the previous iteration's vertices) through [`SubPathMis::for_constants`].
+/// alongside so that a vertex can be weighted for another radius (per-pixel radius) and so that
+/// a stored light vertex needs only dVCM, cVC, cVM ([`SubPathMis::for_constants`] rebuilds
+/// the rest).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SubPathMis {
     /// dVCM.

@@ -54,8 +54,8 @@ use crate::hash_grid::HashGrid;
 use camera_pass::trace_camera_path_recorded;
 use connect::{Splat, SplatTarget};
 use light_pass::trace_light_path;
-use light_vertex::{LightVertex, LightVertexStore, MergeVertex};
-use merge::MergeSource;
+use light_vertex::{LightPath, LightVertex, LightVertexStore, MergeData, MergeRecord};
+use merge::{MergeSource, MergeVertices};
 use mis::MisConstants;
 use technique_images::{TechniqueFrame, TechniqueLayout, TechniqueValues};
 
@@ -213,9 +213,9 @@ pub struct VcmSettings {
     pub radius_alpha: f32,
     /// Global or per-pixel radius.
     pub radius_mode: RadiusMode,
-    /// Memory-efficient progressive mode (§6.2): each pixel traces its light sub-path right
-    /// before its camera sub-path and connects to it; merging uses the previous iteration's
-    /// light vertices, of which only the 64-byte merging data is kept.
+    /// Memory-efficient mode (after §6.2): only 48-byte merging records of the light vertices are
+    /// kept; each pixel traces its light sub-path again right before its camera sub-path and
+    /// connects to it. The image is the default mode's, bit for bit; the light walks cost twice.
     pub memory_efficient: bool,
     /// Spectral mode: four hero-rotated wavelengths per path ([`Hero4`]) instead of RGB.
     pub spectral: bool,
@@ -284,8 +284,9 @@ impl Iteration<'_> {
 pub struct IterationStats {
     /// Light vertices stored for merging or connection.
     pub light_vertices: usize,
-    /// Bytes per stored light vertex (80 in the two-stage mode — 64 more for the merging copy
-    /// when merging —, 64 in the memory-efficient mode).
+    /// Bytes per stored light vertex: the record's size ([`light_vertex::LightVertex`], 64 in
+    /// RGB mode, 68 in spectral mode; [`light_vertex::MergeRecord`], 48 or 52, in the
+    /// memory-efficient mode). With merging, the two-stage mode adds a 4-byte slot map.
     pub bytes_per_vertex: usize,
     /// Light-tracing splats.
     pub splats: usize,
@@ -316,9 +317,6 @@ const LIGHT_CHUNK: usize = 1024;
 
 /// Offset that separates the random streams of light sub-paths from those of camera paths.
 const LIGHT_STREAM: u64 = 1 << 62;
-
-/// Iteration index of the extra light pass that seeds merging in the memory-efficient mode.
-const SEED_ITERATION: u64 = u64::MAX;
 
 /// Offset of the random streams that draw wavelengths (spectral mode only, so RGB renders draw
 /// exactly the numbers they drew before spectral mode existed).
@@ -456,23 +454,22 @@ struct Engine<S: SpectralMode> {
     pixel_footprints: Option<Vec<f32>>,
     pixel_radii: Vec<f32>,
     store: LightVertexStore<S>,
-    merge_vertices: Vec<MergeVertex<S>>,
+    /// The memory-efficient mode's merging-only records, in grid order.
+    records: Vec<MergeRecord<S>>,
     grid: HashGrid,
     /// Per-pixel contributions by family of the last iteration, when requested.
     family_frames: Option<Vec<FamilyValues>>,
     /// Per-pixel contributions by (s, t) technique of the last iteration, when requested.
     technique_frame: Option<TechniqueFrame>,
     stats: IterationStats,
-    /// The memory-efficient mode has light vertices to merge with.
-    merge_seeded: bool,
 }
 
 /// One chunk of light sub-paths: vertices, per-path ends (relative), splats.
 type LightChunk<S> = (Vec<LightVertex<S>>, Vec<u32>, Vec<Splat>);
 
-/// One image row of the single-stage mode: light vertices, splats, per-pixel family values and
-/// rejected estimates.
-type RowResult<S> = (Vec<LightVertex<S>>, Vec<Splat>, Vec<FamilyValues>, RejectedCounts);
+/// One image row of the memory-efficient mode: splats, per-pixel family values and rejected
+/// estimates.
+type RowResult = (Vec<Splat>, Vec<FamilyValues>, RejectedCounts);
 
 impl<S: SpectralMode> Engine<S> {
     /// An engine for `scene`.
@@ -487,12 +484,11 @@ impl<S: SpectralMode> Engine<S> {
             pixel_footprints,
             pixel_radii: Vec::new(),
             store: LightVertexStore::default(),
-            merge_vertices: Vec::new(),
+            records: Vec::new(),
             grid: HashGrid::new(),
             family_frames: None,
             technique_frame: None,
             stats: IterationStats::default(),
-            merge_seeded: false,
         }
     }
 
@@ -551,20 +547,15 @@ impl<S: SpectralMode> Engine<S> {
     ) -> (RejectedCounts, usize) {
         let pixel_count = frame.pixels.len();
         let start = std::time::Instant::now();
-        let chunks = trace_light_chunks(scene, seed, iteration, it, pixel_count, sets);
         self.store.clear();
-        for (vertices, ends, _) in &chunks {
-            let base = self.store.vertices.len() as u32;
-            self.store.vertices.extend_from_slice(vertices);
-            self.store.path_ends.extend(ends.iter().map(|e| e + base));
-        }
+        let splat_chunks = trace_light_pass(scene, seed, iteration, it, pixel_count, sets, &mut self.store);
         let light_pass = start.elapsed();
         if it.techniques.merge {
-            self.build_merge_grid(it.radius);
+            index_for_merging(&mut self.store, &mut self.grid, it.radius);
         }
         let grid_build = start.elapsed() - light_pass;
         let store = &self.store;
-        let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: it.rebase() };
+        let source = MergeSource { vertices: MergeVertices::Full(&self.store.vertices), grid: &self.grid };
         let merge_source = it.techniques.merge.then_some(source);
         let width = frame.width as usize;
         let mut rejected =
@@ -580,23 +571,27 @@ impl<S: SpectralMode> Engine<S> {
                 trace_camera_path_recorded(scene, it, x, y, &mut rng, light_path, merge, &wavelengths, techniques)
             });
         let camera_pass = start.elapsed() - light_pass - grid_build;
-        let splats = chunks.iter().map(|c| c.2.len()).sum();
+        let splats = splat_chunks.iter().map(Vec::len).sum();
         apply_splats(
             frame,
             &scene.camera,
             self.family_frames.as_mut(),
             self.technique_frame.as_mut(),
-            chunks.iter().map(|c| c.2.as_slice()),
+            splat_chunks.iter().map(Vec::as_slice),
             &mut rejected,
         );
         self.stats.phases = PhaseTimes { light_pass, grid_build, camera_pass };
         self.stats.light_vertices = self.store.vertices.len();
-        self.stats.bytes_per_vertex = LightVertexStore::<S>::BYTES_PER_VERTEX
-            + if it.techniques.merge { std::mem::size_of::<MergeVertex<S>>() } else { 0 };
+        self.stats.bytes_per_vertex = LightVertexStore::<S>::BYTES_PER_VERTEX;
         (rejected, splats)
     }
 
-    /// The memory-efficient single-stage iteration (§6.2).
+    /// The memory-efficient iteration (§6.2, restructured): merging-only records of every light
+    /// sub-path and the grid over them, then per pixel its light sub-path traced again (the same
+    /// random stream, so the same vertices; camera connections on) right before its camera
+    /// sub-path, which connects to it and merges with the records. Nothing but the 48-byte
+    /// records is kept for a whole iteration, and merging uses the iteration's own light
+    /// vertices, so the MIS weights and the wavelengths are those of the two-stage mode.
     fn run_single_stage(
         &mut self,
         scene: &Scene,
@@ -607,26 +602,29 @@ impl<S: SpectralMode> Engine<S> {
         sets: &WavelengthSource<S>,
     ) -> (RejectedCounts, usize) {
         let pixel_count = frame.pixels.len();
-        if it.techniques.merge && !self.merge_seeded {
-            // Merging uses the previous iteration's light vertices. The first iteration of a
-            // render merges with an extra set of light sub-paths; a resumed render re-traces
-            // those of the iteration before it (the same random streams, so the same vertices
-            // as in an uninterrupted render).
-            let source = if iteration == 0 { SEED_ITERATION } else { iteration - 1 };
-            let chunks = trace_light_chunks(scene, seed, source, it, pixel_count, sets);
-            self.store.clear();
-            for (vertices, _, _) in &chunks {
-                self.store.vertices.extend_from_slice(vertices);
-            }
-            self.build_merge_grid(it.radius);
-            self.merge_seeded = true;
+        let start = std::time::Instant::now();
+        if it.techniques.merge {
+            // The first trace stores vertices and connects nothing to the camera.
+            let merging_only = Iteration { techniques: Techniques { connect: false, ..it.techniques }, ..*it };
+            trace_merge_records(scene, seed, iteration, &merging_only, pixel_count, sets, &mut self.records);
+            let mut positions: Vec<math::Vec3> = Vec::new();
+            self.records.par_iter().map(MergeData::position).collect_into_vec(&mut positions);
+            self.grid.build(&positions, it.radius);
+            drop(positions);
+            let mut slots = Vec::new();
+            light_vertex::slot_map(self.records.len(), self.grid.sorted_indices(), &mut slots);
+            light_vertex::permute(&mut self.records, &slots);
+        } else {
+            self.records.clear();
         }
+        let light_pass = start.elapsed();
         // Every row traces its pixels' light sub-paths and camera paths; rows return their
-        // light vertices (for the next iteration's merging) and splats.
+        // splats, per-pixel family values and rejected counts.
         let width = frame.width as usize;
-        let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: true };
+        let source = MergeSource { vertices: MergeVertices::Compact(&self.records), grid: &self.grid };
         let merge_source = it.techniques.merge.then_some(source);
         let family_frames = self.family_frames.as_mut();
+        let record_families = family_frames.is_some();
         let layout = self.technique_frame.as_ref().map(|t| t.layout);
         let images = layout.map_or(0, |l| l.len());
         if let Some(techniques) = &mut self.technique_frame {
@@ -637,7 +635,7 @@ impl<S: SpectralMode> Engine<S> {
             Some(techniques) => techniques.values.chunks_mut(width * images).collect(),
             None => frame.pixels.chunks(width).map(|_| <&mut [Rgb]>::default()).collect(),
         };
-        let rows: Vec<RowResult<S>> = frame
+        let rows: Vec<RowResult> = frame
             .pixels
             .par_chunks_mut(width)
             .zip(technique_rows.par_iter_mut())
@@ -645,17 +643,18 @@ impl<S: SpectralMode> Engine<S> {
             .map(|(row, (pixels, technique_row))| {
                 let mut vertices = Vec::new();
                 let mut splats = Vec::new();
+                // Per-pixel family values, kept only when recorded.
                 let mut families = Vec::new();
                 let mut rejected = RejectedCounts::default();
                 let mut stage = vec![Rgb::BLACK; images];
                 for (column, pixel) in pixels.iter_mut().enumerate() {
                     let index = row * width + column;
-                    let start = vertices.len();
+                    vertices.clear();
                     let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
                     let wavelengths = sets.get(seed, iteration, index as u64);
                     trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &wavelengths);
                     let mut rng = Rng::for_stream(seed, iteration, index as u64);
-                    let light_path = &vertices[start..];
+                    let light_path = LightPath::Contiguous(&vertices);
                     let techniques = layout.map(|layout| {
                         let pixel_images = &mut technique_row[column * images..(column + 1) * images];
                         TechniqueValues::new(layout, pixel_images, &mut stage)
@@ -674,79 +673,119 @@ impl<S: SpectralMode> Engine<S> {
                     values.discard_overflow();
                     values.count_rejected(&mut rejected);
                     *pixel = values.total();
-                    families.push(values);
+                    if record_families {
+                        families.push(values);
+                    }
                 }
-                (vertices, splats, families, rejected)
+                (splats, families, rejected)
             })
             .collect();
         let mut rejected = RejectedCounts::default();
         if let Some(frames) = family_frames {
             frames.clear();
-            for (_, _, families, _) in &rows {
+            for (_, families, _) in &rows {
                 frames.extend_from_slice(families);
             }
         }
-        self.store.clear();
-        for (vertices, _, _, row_rejected) in &rows {
-            self.store.vertices.extend_from_slice(vertices);
+        for (_, _, row_rejected) in &rows {
             for (total, r) in rejected.iter_mut().zip(row_rejected) {
                 *total += r;
             }
         }
-        let splats = rows.iter().map(|r| r.1.len()).sum();
+        let camera_pass = start.elapsed() - light_pass;
+        let splats = rows.iter().map(|r| r.0.len()).sum();
         apply_splats(
             frame,
             &scene.camera,
             self.family_frames.as_mut(),
             self.technique_frame.as_mut(),
-            rows.iter().map(|r| r.1.as_slice()),
+            rows.iter().map(|r| r.0.as_slice()),
             &mut rejected,
         );
-        // This iteration's vertices serve the next iteration's merges, at its radius.
-        if it.techniques.merge {
-            let next = match &self.pixel_footprints {
-                None => self.radius(iteration + 1),
-                Some(f) => f.iter().fold(0.0f32, |a, b| a.max(*b)) * self.schedule(iteration + 1),
-            };
-            self.build_merge_grid(next.max(1e-7));
-        }
-        self.stats.light_vertices = self.merge_vertices.len();
-        self.stats.bytes_per_vertex = std::mem::size_of::<MergeVertex<S>>();
+        self.stats.phases = PhaseTimes { light_pass, grid_build: std::time::Duration::ZERO, camera_pass };
+        self.stats.light_vertices = self.records.len();
+        self.stats.bytes_per_vertex = std::mem::size_of::<MergeRecord<S>>();
         (rejected, splats)
-    }
-
-    /// Builds the grid over the stored light vertices and lays their merging data out in the
-    /// grid's slot order.
-    fn build_merge_grid(&mut self, radius: f32) {
-        let mut positions: Vec<math::Vec3> = Vec::new();
-        self.store.vertices.par_iter().map(|v| v.position).collect_into_vec(&mut positions);
-        self.grid.build(&positions, radius);
-        let vertices = &self.store.vertices;
-        self.grid
-            .sorted_indices()
-            .par_iter()
-            .map(|&i| MergeVertex::from(&vertices[i as usize]))
-            .collect_into_vec(&mut self.merge_vertices);
     }
 }
 
-/// Traces `pixel_count` light sub-paths of `iteration` in parallel chunks, in order.
-fn trace_light_chunks<S: SpectralMode>(
+/// Builds `grid` over the vertices of `store` for queries of radius `radius` and moves the
+/// vertices into the grid's slot order (in place; see [`LightVertexStore::permute_to_slots`]).
+fn index_for_merging<S: SpectralMode>(store: &mut LightVertexStore<S>, grid: &mut HashGrid, radius: f32) {
+    let mut positions: Vec<math::Vec3> = Vec::new();
+    store.vertices.par_iter().map(|v| v.position).collect_into_vec(&mut positions);
+    grid.build(&positions, radius);
+    drop(positions);
+    store.permute_to_slots(grid.sorted_indices());
+}
+
+/// Light sub-paths traced per batch of the light pass: the vertices of one batch are moved into
+/// the store before the next batch is traced, so the pass never holds a second copy of the
+/// iteration's vertices.
+const LIGHT_BATCH: usize = 32 * LIGHT_CHUNK;
+
+/// Traces the `pixel_count` light sub-paths of `iteration` in parallel chunks and appends their
+/// vertices and path ends to `store`, in path order (deterministic for any thread count).
+/// Returns the light-tracing splats, per chunk in path order.
+fn trace_light_pass<S: SpectralMode>(
     scene: &Scene,
     seed: u64,
     iteration: u64,
     it: &Iteration,
     pixel_count: usize,
     sets: &WavelengthSource<S>,
+    store: &mut LightVertexStore<S>,
+) -> Vec<Vec<Splat>> {
+    let mut splats = Vec::new();
+    for batch in (0..pixel_count).step_by(LIGHT_BATCH) {
+        let paths = batch..(batch + LIGHT_BATCH).min(pixel_count);
+        for (vertices, ends, chunk_splats) in trace_light_chunks(scene, seed, iteration, it, paths, sets) {
+            let base = store.vertices.len() as u32;
+            store.vertices.extend_from_slice(&vertices);
+            store.path_ends.extend(ends.iter().map(|e| e + base));
+            splats.push(chunk_splats);
+        }
+    }
+    splats
+}
+
+/// Traces the `pixel_count` light sub-paths of `iteration` in parallel chunks and replaces
+/// `records` with the merging-only records of their vertices, in path order.
+fn trace_merge_records<S: SpectralMode>(
+    scene: &Scene,
+    seed: u64,
+    iteration: u64,
+    it: &Iteration,
+    pixel_count: usize,
+    sets: &WavelengthSource<S>,
+    records: &mut Vec<MergeRecord<S>>,
+) {
+    records.clear();
+    for batch in (0..pixel_count).step_by(LIGHT_BATCH) {
+        let paths = batch..(batch + LIGHT_BATCH).min(pixel_count);
+        for (vertices, _, _) in trace_light_chunks(scene, seed, iteration, it, paths, sets) {
+            records.extend(vertices.iter().map(MergeRecord::from));
+        }
+    }
+}
+
+/// Traces the light sub-paths `paths` of `iteration` in parallel chunks, in order.
+fn trace_light_chunks<S: SpectralMode>(
+    scene: &Scene,
+    seed: u64,
+    iteration: u64,
+    it: &Iteration,
+    paths: std::ops::Range<usize>,
+    sets: &WavelengthSource<S>,
 ) -> Vec<LightChunk<S>> {
-    (0..pixel_count.div_ceil(LIGHT_CHUNK))
+    (paths.start..paths.end)
         .into_par_iter()
-        .map(|chunk| {
+        .step_by(LIGHT_CHUNK)
+        .map(|first| {
             let mut vertices = Vec::new();
             let mut ends = Vec::new();
             let mut splats = Vec::new();
-            let end = ((chunk + 1) * LIGHT_CHUNK).min(pixel_count);
-            for path in chunk * LIGHT_CHUNK..end {
+            for path in first..(first + LIGHT_CHUNK).min(paths.end) {
                 let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
                 let wavelengths = sets.get(seed, iteration, path as u64);
                 trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats, &wavelengths);

@@ -1,0 +1,128 @@
+//! Unit vectors in 32 bits: the octahedral map (the sphere folded onto the square [−1, 1]²
+//! through the octahedron |x| + |y| + |z| = 1), each square coordinate quantised to 16 bits.
+//!
+//! The encoder tries the four grid points around the exact square position and keeps the one
+//! whose decoded direction is closest, so the error is the grid's, not the rounding's: the
+//! largest angle between a unit vector and its decoded code is below
+//! [`MAX_ANGULAR_ERROR`] radians (measured over 10⁶ random directions and the axes, diagonals
+//! and near-seam directions by this module's tests).
+
+use glam::{Vec2, Vec3};
+
+/// Upper bound of the angle (radians) between a unit vector and its decoded 32-bit code
+/// (tested; the measured maximum is 4.3·10⁻⁵, 0.0025°).
+pub const MAX_ANGULAR_ERROR: f32 = 5.0e-5;
+
+/// Largest 16-bit code, the square coordinate +1.
+const SCALE: f32 = 65535.0;
+
+/// The octahedral square position of unit vector `v`, in [−1, 1]².
+#[inline]
+fn to_square(v: Vec3) -> Vec2 {
+    let inv_l1 = 1.0 / (v.x.abs() + v.y.abs() + v.z.abs());
+    let p = Vec2::new(v.x, v.y) * inv_l1;
+    if v.z >= 0.0 {
+        p
+    } else {
+        // Fold the lower hemisphere over the diagonals.
+        Vec2::new((1.0 - p.y.abs()) * sign(p.x), (1.0 - p.x.abs()) * sign(p.y))
+    }
+}
+
+/// The unit vector of square position `p` in [−1, 1]².
+#[inline]
+fn from_square(p: Vec2) -> Vec3 {
+    let z = 1.0 - p.x.abs() - p.y.abs();
+    let (x, y) = if z >= 0.0 { (p.x, p.y) } else { ((1.0 - p.y.abs()) * sign(p.x), (1.0 - p.x.abs()) * sign(p.y)) };
+    Vec3::new(x, y, z).normalize()
+}
+
+/// +1 for non-negative values, −1 otherwise (0 folds like +0).
+#[inline]
+fn sign(x: f32) -> f32 {
+    if x >= 0.0 { 1.0 } else { -1.0 }
+}
+
+/// The square coordinate of 16-bit code `c`.
+#[inline]
+fn coordinate(c: u32) -> f32 {
+    c as f32 * (2.0 / SCALE) - 1.0
+}
+
+/// Decodes a 32-bit code made by [`encode`] into a unit vector.
+#[inline]
+pub fn decode(code: u32) -> Vec3 {
+    from_square(Vec2::new(coordinate(code & 0xffff), coordinate(code >> 16)))
+}
+
+/// Encodes unit vector `v` (non-zero; it need not be exactly normalised) in 32 bits: the best
+/// of the four codes around its square position. A non-finite `v` encodes +z.
+#[inline]
+pub fn encode(v: Vec3) -> u32 {
+    if !v.is_finite() || v == Vec3::ZERO {
+        return encode(Vec3::Z);
+    }
+    let v = v.normalize();
+    let p = (to_square(v) + 1.0) * (0.5 * SCALE);
+    let (x0, y0) = (p.x.floor().clamp(0.0, SCALE) as u32, p.y.floor().clamp(0.0, SCALE) as u32);
+    // Compare distances, not cosines: cosines this close to 1 are equal in f32.
+    let mut best = (f32::INFINITY, 0);
+    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        let (x, y) = ((x0 + dx).min(65535), (y0 + dy).min(65535));
+        let code = x | y << 16;
+        let distance_squared = (decode(code) - v).length_squared();
+        if distance_squared < best.0 {
+            best = (distance_squared, code);
+        }
+    }
+    best.1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Rng;
+
+    fn angle(a: Vec3, b: Vec3) -> f32 {
+        // atan2 of |a×b| and a·b is accurate for small angles (acos is not).
+        a.cross(b).length().atan2(a.dot(b))
+    }
+
+    #[test]
+    fn decoded_codes_are_within_the_stated_angle() {
+        let mut rng = Rng::for_stream(3, 0, 0);
+        let mut worst = 0.0f32;
+        let mut check = |v: Vec3| {
+            let v = v.normalize();
+            let d = decode(encode(v));
+            assert!((d.length() - 1.0).abs() < 1e-6);
+            worst = worst.max(angle(v, d));
+        };
+        for _ in 0..1_000_000 {
+            let (u, w) = (rng.uniform(), rng.uniform());
+            let z = 1.0 - 2.0 * u;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = 2.0 * std::f32::consts::PI * w;
+            check(Vec3::new(r * phi.cos(), r * phi.sin(), z));
+        }
+        // Axes, diagonals, and directions next to the fold (z ≈ 0) and the seams (x or y ≈ 0).
+        for v in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z, Vec3::ONE, -Vec3::ONE] {
+            check(v);
+        }
+        for e in [1e-7f32, 1e-5, 1e-3] {
+            for (x, y) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0), (e, 1.0), (1.0, e), (-e, -1.0)] {
+                check(Vec3::new(x, y, e));
+                check(Vec3::new(x, y, -e));
+            }
+        }
+        assert!(worst < MAX_ANGULAR_ERROR, "largest angular error {worst} rad");
+        // The bound is tight enough to mean something: the grid spacing is ~3e-5.
+        assert!(worst > 0.25 * MAX_ANGULAR_ERROR, "largest angular error {worst} rad");
+    }
+
+    #[test]
+    fn degenerate_input_encodes_plus_z() {
+        assert_eq!(decode(encode(Vec3::ZERO)), decode(encode(Vec3::Z)));
+        assert_eq!(decode(encode(Vec3::new(f32::NAN, 0.0, 1.0))), decode(encode(Vec3::Z)));
+    }
+}
