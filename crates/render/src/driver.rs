@@ -183,6 +183,13 @@ impl<'a> Renderer<'a> {
             .num_threads(settings.threads)
             .build()
             .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
+        let max_materials = crate::vcm::light_vertex::MAX_MATERIAL as usize + 1;
+        if settings.vcm_settings().is_some() && scene.materials.len() > max_materials {
+            return Err(format!(
+                "the scene has {} materials; the VCM engine's light vertices can name at most {max_materials}",
+                scene.materials.len()
+            ));
+        }
         let integrator = match (settings.algorithm, settings.vcm_settings()) {
             (_, Some(vcm)) => Integrator::Vcm(Box::new(VcmEngine::new(scene, vcm))),
             (Algorithm::EyeLight, _) => Integrator::EyeLight,
