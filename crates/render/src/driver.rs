@@ -89,6 +89,11 @@ pub struct RenderSettings {
     /// Spectral mode: hero wavelength sampling with four wavelengths per path
     /// ([`spectrum::Hero4`]); RGB otherwise.
     pub spectral: bool,
+    /// Russian roulette of the path tracer (`pt`); the VCM engine always uses the BSDF's
+    /// continuation probability.
+    pub russian_roulette: crate::path_tracer::RussianRoulette,
+    /// MIS heuristic of the path tracer (`pt`).
+    pub heuristic: crate::path_tracer::Heuristic,
 }
 
 impl Default for RenderSettings {
@@ -105,6 +110,8 @@ impl Default for RenderSettings {
             radius_mode: RadiusMode::Global,
             memory_efficient: false,
             spectral: false,
+            russian_roulette: crate::path_tracer::RussianRoulette::default(),
+            heuristic: crate::path_tracer::Heuristic::Balance,
         }
     }
 }
@@ -195,6 +202,8 @@ impl<'a> Renderer<'a> {
             (Algorithm::EyeLight, _) => Integrator::EyeLight,
             _ => Integrator::PathTracing(PathTracer {
                 spectral: settings.spectral,
+                russian_roulette: settings.russian_roulette,
+                heuristic: settings.heuristic,
                 ..PathTracer::new(settings.max_length)
             }),
         };

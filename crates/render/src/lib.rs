@@ -23,3 +23,11 @@ pub use driver::{Algorithm, RenderOutput, RenderSettings, render};
 pub fn balance_heuristic(own: f32, other: f32) -> f32 {
     if own + other > 0.0 { own / (own + other) } else { 0.0 }
 }
+
+/// The power heuristic (exponent 2) weight of a sample drawn with density `own` when another
+/// technique would have drawn it with density `other` (both in the same measure).
+#[inline]
+pub fn power_heuristic(own: f32, other: f32) -> f32 {
+    let (a, b) = (own * own, other * other);
+    if a + b > 0.0 && a.is_finite() { a / (a + b) } else { balance_heuristic(own, other) }
+}

@@ -1,6 +1,13 @@
 //! The reference path tracer: unidirectional camera paths with BSDF sampling and next-event
-//! estimation (one light sample per non-specular vertex), combined with the balance heuristic.
-//! Russian roulette uses the BSDF's continuation probability and enters the BSDF pdf.
+//! estimation (one light sample per non-specular vertex), combined with the balance or the
+//! power heuristic ([`Heuristic`]).
+//!
+//! Russian roulette ([`RussianRoulette`]) either follows Mitsuba 3's policy — no roulette for the
+//! first `start` bounces, then survival `min(max throughput component, 0.95)` — or, as the VCM
+//! engine must, the BSDF's continuation probability at every bounce. Only the latter is part of
+//! the BSDF pdf in the MIS weights (a rule that depends on the throughput cannot be evaluated for
+//! the other technique, so the throughput rule leaves the weights to the BSDF and light pdfs;
+//! both choices give weights that sum to one).
 //!
 //! Path length counts segments including the camera segment: an emitter seen directly is a
 //! path of length 1, direct lighting of the first hit length 2.
@@ -12,8 +19,8 @@ use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::{Bsdf, Scene, TransportMode};
 use spectrum::{Hero4, Rgb, SpectralMode};
 
-use crate::balance_heuristic;
 use crate::fluorescent::{FluorescentVertex, scatter_slots, view};
+use crate::{balance_heuristic, power_heuristic};
 
 /// Settings of the path tracer.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,12 +34,66 @@ pub struct PathTracer {
     /// Spectral mode ([`Hero4`]): each camera path draws its own four wavelengths (the first
     /// number of its stream); otherwise RGB.
     pub spectral: bool,
+    /// Russian-roulette policy.
+    pub russian_roulette: RussianRoulette,
+    /// How next-event estimation and BSDF sampling are weighted.
+    pub heuristic: Heuristic,
+}
+
+/// When a path tracer's path is stopped at random (and its survivors scaled up).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RussianRoulette {
+    /// Mitsuba 3's policy: from bounce `start` on (a bounce is a scattering vertex; the first
+    /// surface hit is bounce 1), survival probability `min(max throughput component, 0.95)`,
+    /// evaluated after the bounce's BSDF weight is applied.
+    Throughput {
+        /// First bounce that may be stopped (Mitsuba's `rr_depth`, default 5).
+        start: u32,
+    },
+    /// At every bounce with the BSDF's continuation probability (its albedo estimate), the rule
+    /// of the VCM engine's sub-paths; it enters the MIS weights as part of the BSDF pdf.
+    Albedo,
+}
+
+impl Default for RussianRoulette {
+    /// Mitsuba 3's default, `rr_depth` = 5.
+    fn default() -> Self {
+        RussianRoulette::Throughput { start: 5 }
+    }
+}
+
+/// The MIS heuristic of the path tracer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Heuristic {
+    /// Balance heuristic: w = p / (p + q).
+    #[default]
+    Balance,
+    /// Power heuristic with exponent 2: w = p² / (p² + q²) (Mitsuba 3's choice).
+    Power,
+}
+
+impl Heuristic {
+    /// The weight of a sample of density `own` against a technique of density `other`.
+    #[inline]
+    fn weight(self, own: f32, other: f32) -> f32 {
+        match self {
+            Heuristic::Balance => balance_heuristic(own, other),
+            Heuristic::Power => power_heuristic(own, other),
+        }
+    }
 }
 
 impl PathTracer {
-    /// The path tracer with next-event estimation.
+    /// The path tracer with next-event estimation, Mitsuba's Russian roulette and the balance
+    /// heuristic.
     pub fn new(max_length: u32) -> Self {
-        Self { max_length, next_event_estimation: true, spectral: false }
+        Self {
+            max_length,
+            next_event_estimation: true,
+            spectral: false,
+            russian_roulette: RussianRoulette::default(),
+            heuristic: Heuristic::Balance,
+        }
     }
 
     /// Radiance arriving at the camera along `camera_ray`, as linear sRGB.
@@ -40,22 +101,22 @@ impl PathTracer {
         if self.spectral {
             let (u, v) = (rng.uniform(), rng.uniform());
             let wavelengths = Hero4::sample_wavelengths(u, v, scene.has_fluorescence());
-            radiance::<Hero4>(scene, camera_ray, rng, self.max_length, self.next_event_estimation, &wavelengths)
-                .to_rgb(&wavelengths)
+            radiance::<Hero4>(self, scene, camera_ray, rng, &wavelengths).to_rgb(&wavelengths)
         } else {
-            radiance::<Rgb>(scene, camera_ray, rng, self.max_length, self.next_event_estimation, &())
+            radiance::<Rgb>(self, scene, camera_ray, rng, &())
         }
     }
 }
 
 fn radiance<S: SpectralMode>(
+    tracer: &PathTracer,
     scene: &Scene,
     camera_ray: Ray,
     rng: &mut Rng,
-    max_length: u32,
-    nee: bool,
     w: &S::Wavelengths,
 ) -> S {
+    let (max_length, nee, heuristic) = (tracer.max_length, tracer.next_event_estimation, tracer.heuristic);
+    let albedo_roulette = tracer.russian_roulette == RussianRoulette::Albedo;
     let sphere = &scene.bounding_sphere;
     let hero = S::hero_wavelength(w);
     let mut ray = camera_ray;
@@ -81,7 +142,7 @@ fn radiance<S: SpectralMode>(
                 let weight = if last_specular || !nee {
                     1.0
                 } else {
-                    balance_heuristic(last_pdf, emitted.direct_pdf.0 * scene.light_pick_probability(index))
+                    heuristic.weight(last_pdf, emitted.direct_pdf.0 * scene.light_pick_probability(index))
                 };
                 result += throughput * view(&slots, scene.emission::<S>(index, w, emitted.radiance)) * weight;
             }
@@ -97,7 +158,7 @@ fn radiance<S: SpectralMode>(
                 } else {
                     let distance = hit.distance + origin_offset;
                     let direct_pdf = emitted.direct_pdf.to_solid_angle(distance * distance, emitted.cos_at_light);
-                    balance_heuristic(last_pdf, direct_pdf.0 * scene.light_pick_probability(light_index))
+                    heuristic.weight(last_pdf, direct_pdf.0 * scene.light_pick_probability(light_index))
                 };
                 result += throughput * view(&slots, scene.emission::<S>(light_index, w, emitted.radiance)) * weight;
             }
@@ -111,7 +172,8 @@ fn radiance<S: SpectralMode>(
         else {
             break;
         };
-        let continuation = bsdf.continuation_probability();
+        // The albedo rule's continuation probability, part of the BSDF pdf (1 otherwise).
+        let continuation = if albedo_roulette { bsdf.continuation_probability() } else { 1.0 };
         let fluorescent = FluorescentVertex::at(scene.material(&hit), hit.uv);
 
         // Next-event estimation (a path one segment longer).
@@ -125,11 +187,8 @@ fn radiance<S: SpectralMode>(
                 && !scene.occluded(hit.position, direct.direction, direct.distance)
             {
                 let light_pdf = direct.direct_pdf.0 * pick;
-                let weight = if light.is_delta() {
-                    1.0
-                } else {
-                    balance_heuristic(light_pdf, eval.pdf.forward.0 * continuation)
-                };
+                let weight =
+                    if light.is_delta() { 1.0 } else { heuristic.weight(light_pdf, eval.pdf.forward.0 * continuation) };
                 let emitted = scene.emission::<S>(index, w, direct.radiance);
                 let scale = eval.cos_generated * weight / light_pdf;
                 if fluorescent.is_none() && slots == S::Slots::default() {
@@ -155,6 +214,15 @@ fn radiance<S: SpectralMode>(
                 throughput =
                     f.apply_camera(w, label, sample.value, &mut slots, throughput) * (sample.cos_generated / pdf);
             }
+        }
+        if let RussianRoulette::Throughput { start } = tracer.russian_roulette
+            && path_length >= start
+        {
+            let survival = throughput.max_component().min(0.95);
+            if survival.is_nan() || survival <= 0.0 || rng.uniform() >= survival {
+                break;
+            }
+            throughput = throughput * (1.0 / survival);
         }
         if sample.dispersive && !terminated {
             throughput = throughput.terminate_secondary();

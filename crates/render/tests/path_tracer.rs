@@ -6,7 +6,7 @@ mod common;
 
 use math::{Rng, Vec2};
 use render::driver::Budget;
-use render::path_tracer::PathTracer;
+use render::path_tracer::{Heuristic, PathTracer, RussianRoulette};
 use render::{Algorithm, RenderSettings};
 use scene::{Light, Scene, cornell};
 use testkit::{MeanVar, sidak, z_test_entries};
@@ -28,12 +28,17 @@ fn estimate(scene: &Scene, tracer: PathTracer, samples: u64, seed: u64) -> MeanV
 fn furnace_gives_the_geometric_series() {
     // Le·Σ_{k<K} ρ^k for max path length K.
     let cases = [(1.0f32, 0.5f32, 1u32), (1.0, 0.5, 2), (0.5, 0.8, 3), (1.0, 0.5, 10), (0.25, 0.9, 10)];
-    let tests = cases.len() * 2;
+    let policies = [RussianRoulette::default(), RussianRoulette::Throughput { start: 1 }, RussianRoulette::Albedo];
+    let heuristics = [Heuristic::Balance, Heuristic::Power];
+    let tests = cases.len() * 2 * policies.len() * heuristics.len();
     for (emission, albedo, max_length) in cases {
         let scene = common::furnace(emission, albedo, 16);
         let expected: f64 = (0..max_length).map(|k| emission as f64 * (albedo as f64).powi(k as i32)).sum();
-        for next_event_estimation in [true, false] {
-            let tracer = PathTracer { max_length, next_event_estimation, spectral: false };
+        for ((next_event_estimation, russian_roulette), heuristic) in
+            [true, false].into_iter().flat_map(|n| policies.map(|p| (n, p))).flat_map(|c| heuristics.map(|h| (c, h)))
+        {
+            let tracer =
+                PathTracer { next_event_estimation, russian_roulette, heuristic, ..PathTracer::new(max_length) };
             let stats = estimate(&scene, tracer, 40_000, 17);
             let se = stats.std_error();
             let z = (stats.mean() - expected) / se.max(1e-12);
@@ -41,7 +46,7 @@ fn furnace_gives_the_geometric_series() {
             let p = testkit::z_test_p(stats.mean() - expected, se);
             assert!(
                 p > sidak(1e-3, tests) || (stats.mean() - expected).abs() < 1e-6,
-                "Le={emission} ρ={albedo} K={max_length} NEE={next_event_estimation}: {} ± {se} vs {expected} (z = {z:.2})",
+                "Le={emission} ρ={albedo} K={max_length} NEE={next_event_estimation} {russian_roulette:?} {heuristic:?}: {} ± {se} vs {expected} (z = {z:.2})",
                 stats.mean()
             );
         }
@@ -141,13 +146,8 @@ fn next_event_estimation_and_bsdf_sampling_alone_agree() {
     for mask in [273, 456] {
         let scene = cornell::build(mask, 32, 32).unwrap();
         let (a_mean, a_se) = block_statistics(&scene, PathTracer::new(10), 64, 8, 1);
-        let (b_mean, b_se) = block_statistics(
-            &scene,
-            PathTracer { max_length: 10, next_event_estimation: false, spectral: false },
-            256,
-            8,
-            2,
-        );
+        let (b_mean, b_se) =
+            block_statistics(&scene, PathTracer { next_event_estimation: false, ..PathTracer::new(10) }, 256, 8, 2);
         let outcome = z_test_entries(&a_mean, &a_se, &b_mean, &b_se, 1e-3);
         assert!(outcome.passed, "mask {mask}: {outcome}");
         // The test has power: the means are far from zero.
