@@ -222,7 +222,7 @@ fn radiance<S: SpectralMode>(
             if survival.is_nan() || survival <= 0.0 || rng.uniform() >= survival {
                 break;
             }
-            throughput = throughput * (1.0 / survival);
+            throughput *= 1.0 / survival;
         }
         if sample.dispersive && !terminated {
             throughput = throughput.terminate_secondary();
