@@ -564,7 +564,7 @@ fn point_spot_and_distant_lights() {
     let text = format!(
         "{HEADER}Translate 1 0 0\n\
          LightSource \"point\" \"point3 from\" [0 2 0] \"rgb I\" [1 2 3] \"float scale\" 2\n\
-         LightSource \"spot\" \"point3 from\" [0 0 0] \"point3 to\" [0 -3 0] \"float coneangle\" 40 \"float conedelta\" 10 \"rgb I\" [5 5 5]\n\
+         LightSource \"spot\" \"point3 from\" [0 0 0] \"point3 to\" [0 -3 0] \"float coneangle\" 40 \"float conedeltaangle\" 10 \"rgb I\" [5 5 5]\n\
          Rotate 90 0 0 1\n\
          LightSource \"distant\" \"point3 from\" [0 0 0] \"point3 to\" [1 0 0] \"rgb L\" [0.5 0.5 0.5]\n"
     );

@@ -85,6 +85,11 @@ impl<'a> Loader<'a> {
                 } else {
                     beam
                 };
+                if let Some(texture) = p.named_object("texture") {
+                    texture.take();
+                    let error = texture.node.pos.error(format!("{}: a projected 'texture' is not supported", p.what()));
+                    self.unsupported(error, "the spot light emits its uniform intensity")?;
+                }
                 LightDesc::Spot {
                     position: to_vec3(m.point([0.0; 3])),
                     direction: to_vec3(direction),
