@@ -300,3 +300,39 @@ fn volume_textures_are_named_as_such() {
     let (r, path) = mitsuba("volume_texture", body, &PERMISSIVE);
     assert_error(r, &path, 3, &["<texture type=\"volume\">", "not supported"]);
 }
+
+#[test]
+fn integrators_and_filters_that_change_the_image_are_errors_unless_permissive() {
+    let cases = [
+        ("mi_depth", "<integrator type=\"depth\"/>", 2, "'depth'"),
+        (
+            "mi_box",
+            "<sensor type=\"perspective\"><film type=\"hdrfilm\">\n<rfilter type=\"box\"><float name=\"radius\" value=\"1\"/></rfilter></film></sensor>",
+            3,
+            "radius 1",
+        ),
+    ];
+    for (test, body, line, needle) in cases {
+        let (r, path) = mitsuba(test, body, &STRICT);
+        assert_error(r, &path, line, &[needle, "not supported", "permissive"]);
+        let (r, _) = mitsuba(test, body, &PERMISSIVE);
+        let s = r.unwrap_or_else(|e| panic!("{e}")).description;
+        assert!(s.warnings.iter().any(|w| w.contains(needle)), "{:?}", s.warnings);
+    }
+    let pbrt_cases = [
+        ("pbrt_ao", "Integrator \"ambientocclusion\"\n", "ambientocclusion"),
+        ("pbrt_regularize", "Integrator \"volpath\" \"bool regularize\" true\n", "regularize"),
+    ];
+    for (test, integrator, needle) in pbrt_cases {
+        let text = format!("{integrator}{PBRT_HEADER}WorldBegin\n");
+        let (r, path) = pbrt(test, &text, &STRICT);
+        assert_error(r, &path, 1, &[needle, "not supported", "permissive"]);
+        let (r, _) = pbrt(test, &text, &PERMISSIVE);
+        let s = r.unwrap_or_else(|e| panic!("{e}")).description;
+        assert!(s.warnings.iter().any(|w| w.contains(needle)), "{:?}", s.warnings);
+    }
+    // The light-transport integrators load quietly.
+    let (r, _) =
+        pbrt("pbrt_bdpt", &format!("Integrator \"bdpt\" \"integer maxdepth\" 3\n{PBRT_HEADER}WorldBegin\n"), &STRICT);
+    assert_eq!(r.unwrap().description.max_path_length, Some(4));
+}

@@ -234,10 +234,8 @@ impl<'a> Loader<'a> {
                 if let Some(r) = p.float("radius")?
                     && (r - 0.5).abs() > 1e-6
                 {
-                    self.warnings.push(format!(
-                        "{}: rfilter 'box': radius {r} not supported; 0.5 pixel used",
-                        node.pos.location()
-                    ));
+                    let error = p.error(format!("rfilter 'box': radius {r} is not supported (only 0.5)"));
+                    self.unsupported(error, "0.5 pixel used")?;
                 }
                 FilterDesc::Box
             }
@@ -328,8 +326,8 @@ impl<'a> Loader<'a> {
                 }
             }
             other => {
-                self.warnings
-                    .push(format!("{where_}: integrator '{other}' is not supported; only its max_depth is used"));
+                let error = p.error(format!("integrator '{other}' is not supported"));
+                self.unsupported(error, "rendered with its max_depth by the chosen algorithm")?;
                 depth
             }
         };

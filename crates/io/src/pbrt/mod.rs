@@ -347,6 +347,18 @@ impl Builder {
                     return Err(d.params.error(pos, format!("maxdepth {depth} is negative")));
                 }
                 self.max_path_length = Some(u32::try_from(depth + 1).unwrap_or(u32::MAX));
+                // Integrators that estimate something else than the light transport.
+                if let ty @ ("ambientocclusion" | "aov") = d.str_arg(0) {
+                    let pos = d.arg_pos[0];
+                    self.unsupported(
+                        err(file, pos, format!("Integrator \"{ty}\" is not supported")),
+                        "rendered with its maxdepth by the chosen algorithm",
+                    )?;
+                }
+                if d.params.bool("regularize", false)? {
+                    let pos = d.params.find("regularize").map_or(d.pos, |p| p.pos);
+                    self.unsupported(d.params.error(pos, "\"regularize\" true is not supported"), "no regularisation")?;
+                }
                 self.warn_unused(&d.params);
             }
             "Sampler" => {
