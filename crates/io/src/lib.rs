@@ -12,6 +12,7 @@
 //! [`ImageFormat::from_path`]. All errors are [`ImageError`]s whose messages
 //! name the file; malformed or truncated input gives an error, never a panic.
 
+mod cylinder;
 mod error;
 mod exr_file;
 mod gz;

@@ -1185,7 +1185,26 @@ impl Builder {
                     flip_normals: self.state.reverse_orientation,
                 }
             }
-            other @ ("cylinder" | "curve" | "loopsubdiv" | "cone" | "paraboloid" | "hyperboloid") => {
+            "cylinder" => {
+                let radius = f64::from(p.float("radius", 1.0)?);
+                let z_min = f64::from(p.float("zmin", -1.0)?);
+                let z_max = f64::from(p.float("zmax", 1.0)?);
+                let phi_max = f64::from(p.float("phimax", 360.0)?);
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return Err(err(file, d.pos, format!("cylinder radius {radius} must be positive")));
+                }
+                if !(z_min.is_finite() && z_max.is_finite() && z_min != z_max) {
+                    return Err(err(file, d.pos, format!("cylinder zmin {z_min} and zmax {z_max} must differ")));
+                }
+                if !(phi_max > 0.0 && phi_max <= 360.0) {
+                    return Err(err(file, d.pos, format!("cylinder phimax {phi_max} must be in (0, 360]")));
+                }
+                // pbrt swaps zmin and zmax when they are reversed.
+                let (z0, z1) = (z_min.min(z_max), z_min.max(z_max));
+                let object = crate::cylinder::cylinder_mesh(radius, z0, z1, phi_max.to_radians());
+                Geometry::Mesh(self.to_world_mesh(file, d.pos, object)?)
+            }
+            other @ ("curve" | "loopsubdiv" | "cone" | "paraboloid" | "hyperboloid") => {
                 return Err(err(file, d.arg_pos[0], format!("shape \"{other}\" is not supported")));
             }
             other => return Err(err(file, d.arg_pos[0], format!("unknown shape type \"{other}\""))),
