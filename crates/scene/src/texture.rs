@@ -41,6 +41,23 @@ pub enum Texture {
         /// How texels are looked up.
         sampling: Sampling,
     },
+    /// The product of two textures, channel by channel (pbrt's `scale`: `tex · scale`).
+    Scale {
+        /// The texture scaled.
+        texture: Arc<Texture>,
+        /// The factor.
+        scale: Arc<Texture>,
+    },
+    /// `(1 − a)·tex1 + a·tex2` with `a` the red channel of `amount` clamped to [0, 1] (pbrt's
+    /// `mix`, whose float `amount` texture has equal channels; pbrt does not clamp).
+    Mix {
+        /// The texture where `a` = 0.
+        tex1: Arc<Texture>,
+        /// The texture where `a` = 1.
+        tex2: Arc<Texture>,
+        /// The blend weight.
+        amount: Arc<Texture>,
+    },
 }
 
 /// What an image lookup does with texel coordinates outside the image.
@@ -99,6 +116,11 @@ impl Texture {
             }
             Texture::Bitmap { image, to_uv } => lookup(image, to_uv.apply(uv), Sampling::DEFAULT),
             Texture::SampledBitmap { image, to_uv, sampling } => lookup(image, to_uv.apply(uv), *sampling),
+            Texture::Scale { texture, scale } => texture.eval(uv) * scale.eval(uv),
+            Texture::Mix { tex1, tex2, amount } => {
+                let a = amount.eval(uv).r.clamp(0.0, 1.0);
+                tex1.eval(uv) * (1.0 - a) + tex2.eval(uv) * a
+            }
         }
     }
 
@@ -120,7 +142,8 @@ impl Texture {
         }
     }
 
-    /// An upper bound of every channel over the surface.
+    /// An upper bound of every channel over the surface (for textures without negative
+    /// values, which the loaders ensure for reflectances).
     pub fn max_value(&self) -> Rgb {
         match self {
             Texture::Constant(value) => *value,
@@ -128,6 +151,8 @@ impl Texture {
             Texture::Bitmap { image, .. } | Texture::SampledBitmap { image, .. } => {
                 image.pixels.iter().fold(Rgb::BLACK, |a, b| a.max(*b))
             }
+            Texture::Scale { texture, scale } => texture.max_value() * scale.max_value(),
+            Texture::Mix { tex1, tex2, .. } => tex1.max_value().max(tex2.max_value()),
         }
     }
 }
@@ -257,5 +282,29 @@ mod tests {
         assert!((at(u, WrapMode::Black, FilterMode::Bilinear) - 1.0).abs() < 1e-5);
         // The default sampling builds the plain bitmap variant.
         assert!(matches!(Texture::bitmap(ramp, UvTransform::IDENTITY, Sampling::DEFAULT), Texture::Bitmap { .. }));
+    }
+
+    #[test]
+    fn scale_and_mix() {
+        let ramp =
+            Arc::new(TextureImage { width: 2, height: 1, pixels: vec![Rgb::splat(0.0), Rgb::new(1.0, 2.0, 4.0)] });
+        let bitmap = Arc::new(Texture::Bitmap { image: ramp, to_uv: UvTransform::IDENTITY });
+        let constant = |c: Rgb| Arc::new(Texture::Constant(c));
+        let right = Vec2::new(0.75, 0.5);
+        let scaled = Texture::Scale { texture: bitmap.clone(), scale: constant(Rgb::new(0.5, 0.25, 0.125)) };
+        assert_eq!(scaled.eval(right), Rgb::splat(0.5));
+        assert_eq!(scaled.max_value(), Rgb::splat(0.5));
+        let mix = |a: f32| Texture::Mix {
+            tex1: constant(Rgb::splat(0.2)),
+            tex2: bitmap.clone(),
+            amount: constant(Rgb::splat(a)),
+        };
+        assert_eq!(mix(0.0).eval(right), Rgb::splat(0.2));
+        assert_eq!(mix(1.0).eval(right), Rgb::new(1.0, 2.0, 4.0));
+        let half = mix(0.25).eval(right);
+        assert!((half.r - (0.75 * 0.2 + 0.25)).abs() < 1e-6 && (half.b - (0.75 * 0.2 + 1.0)).abs() < 1e-6);
+        // The amount is clamped.
+        assert_eq!(mix(3.0).eval(right), Rgb::new(1.0, 2.0, 4.0));
+        assert_eq!(mix(0.5).max_value(), Rgb::new(1.0, 2.0, 4.0));
     }
 }

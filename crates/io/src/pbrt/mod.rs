@@ -41,7 +41,8 @@
 //!   file that names them. `Import` is treated as `Include`. Gzip-compressed scene and PLY
 //!   files (`.pbrt.gz`, `.ply.gz`; recognised by their content) are decompressed.
 //! - **Unsupported** features are errors naming them (object instancing, media, textures other
-//!   than `imagemap`/`checkerboard`/`constant`, `coateddiffuse` and other layered materials, …);
+//!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `coateddiffuse` and other layered
+//!   materials, …);
 //!   unsupported optional parameters are warnings in [`SceneDescription::warnings`].
 
 pub mod color;
@@ -887,8 +888,32 @@ impl Builder {
                 };
                 Texture::bitmap(image, to_uv, Sampling { wrap, filter })
             }
-            other @ ("scale" | "mix" | "directionmix" | "bilerp" | "dots" | "fbm" | "wrinkled" | "windy" | "marble"
-            | "ptex") => return Err(err(file, d.arg_pos[2], format!("texture class \"{other}\" is not supported"))),
+            "scale" => {
+                let texture = self.spectrum_texture(p, "tex", Rgb::WHITE, false)?;
+                let scale = self.spectrum_texture(p, "scale", Rgb::WHITE, false)?;
+                match (texture.as_constant(), scale.as_constant()) {
+                    (Some(a), Some(b)) => Texture::Constant(a * b),
+                    _ => Texture::Scale { texture: Arc::new(texture), scale: Arc::new(scale) },
+                }
+            }
+            "mix" => {
+                let tex1 = self.spectrum_texture(p, "tex1", Rgb::BLACK, false)?;
+                let tex2 = self.spectrum_texture(p, "tex2", Rgb::WHITE, false)?;
+                let amount = self.spectrum_texture(p, "amount", Rgb::splat(0.5), false)?;
+                if let Some(a) = amount.as_constant()
+                    && !(0.0..=1.0).contains(&a.r)
+                {
+                    let pos = p.find("amount").map_or(d.pos, |x| x.pos);
+                    return Err(p.error(pos, format!("mix amount {} outside [0, 1] is not supported", a.r)));
+                }
+                match (tex1.as_constant(), tex2.as_constant(), amount.as_constant()) {
+                    (Some(a), Some(b), Some(t)) => Texture::Constant(a * (1.0 - t.r) + b * t.r),
+                    _ => Texture::Mix { tex1: Arc::new(tex1), tex2: Arc::new(tex2), amount: Arc::new(amount) },
+                }
+            }
+            other @ ("directionmix" | "bilerp" | "dots" | "fbm" | "wrinkled" | "windy" | "marble" | "ptex") => {
+                return Err(err(file, d.arg_pos[2], format!("texture class \"{other}\" is not supported")));
+            }
             other => return Err(err(file, d.arg_pos[2], format!("unknown texture class \"{other}\""))),
         };
         self.warn_unused(p);
