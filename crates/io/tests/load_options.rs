@@ -336,3 +336,35 @@ fn integrators_and_filters_that_change_the_image_are_errors_unless_permissive() 
         pbrt("pbrt_bdpt", &format!("Integrator \"bdpt\" \"integer maxdepth\" 3\n{PBRT_HEADER}WorldBegin\n"), &STRICT);
     assert_eq!(r.unwrap().description.max_path_length, Some(4));
 }
+
+#[test]
+fn textures_on_constant_only_parameters_are_errors_unless_permissive() {
+    // A checkerboard of 0.1 and 0.3: its mean over uv ∈ [0, 1]² is 0.2.
+    let checks = r#"<rgb name="color0" value="0.1"/><rgb name="color1" value="0.3"/>"#;
+    let rough = format!(
+        "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/>\n\
+         <texture type=\"checkerboard\" name=\"alpha\">{checks}</texture></bsdf></shape>"
+    );
+    let (r, path) = mitsuba("textured_alpha", &rough, &STRICT);
+    assert_error(r, &path, 3, &["'alpha'", "texture", "permissive"]);
+    let (r, _) = mitsuba("textured_alpha", &rough, &PERMISSIVE);
+    let s = r.unwrap_or_else(|e| panic!("{e}")).description;
+    match &s.materials[s.shapes[0].material as usize] {
+        Material::RoughConductor { alpha_u, alpha_v, .. } => {
+            assert!((alpha_u - 0.2).abs() < 1e-6 && (alpha_v - 0.2).abs() < 1e-6, "{alpha_u} {alpha_v}");
+        }
+        m => panic!("{m:?}"),
+    }
+    assert!(s.warnings.iter().any(|w| w.contains("'alpha'")), "{:?}", s.warnings);
+
+    let emitter = format!(
+        "<shape type=\"sphere\"><emitter type=\"area\">\n<texture type=\"checkerboard\" name=\"radiance\">{checks}</texture>\
+         </emitter></shape>"
+    );
+    let (r, path) = mitsuba("textured_radiance", &emitter, &STRICT);
+    assert_error(r, &path, 3, &["'radiance'", "texture", "permissive"]);
+    let (r, _) = mitsuba("textured_radiance", &emitter, &PERMISSIVE);
+    let s = r.unwrap_or_else(|e| panic!("{e}")).description;
+    let e = s.shapes[0].emission.unwrap();
+    assert!((e.r - 0.2).abs() < 1e-6 && (e.b - 0.2).abs() < 1e-6, "{e:?}");
+}

@@ -174,7 +174,7 @@ impl<'a> Loader<'a> {
     /// GGX roughness `(alpha_u, alpha_v)`: `alpha`, or both `alpha_u` and `alpha_v`; default
     /// 0.1. A Beckmann distribution (Mitsuba's default) is approximated by GGX with the same
     /// alpha, with a warning.
-    fn roughness(&mut self, p: &Plugin, anisotropic: bool) -> Result<(f32, f32), SceneError> {
+    fn roughness(&mut self, p: &Plugin<'a>, anisotropic: bool) -> Result<(f32, f32), SceneError> {
         let distribution = p.string("distribution")?.map(str::to_ascii_lowercase);
         match distribution.as_deref() {
             Some("ggx") => {}
@@ -193,19 +193,25 @@ impl<'a> Loader<'a> {
                 Err(p.error(format!("'{name}' must be a non-negative number, got {v}")))
             }
         };
-        let (has_u, has_v) = (p.has("alpha_u"), p.has("alpha_v"));
+        // A textured roughness: an error, or its mean in a permissive load.
+        let mut value = |name: &str| -> Result<Option<f64>, SceneError> {
+            match self.untextured(p, name)? {
+                Some(mean) => Ok(Some(f64::from(mean.r))),
+                None => p.float(name),
+            }
+        };
+        let (alpha, alpha_u, alpha_v) = (value("alpha")?, value("alpha_u")?, value("alpha_v")?);
+        let (has_u, has_v) = (alpha_u.is_some(), alpha_v.is_some());
         if has_u || has_v {
             if !anisotropic {
                 return Err(p.error("anisotropic roughness (alpha_u, alpha_v) is not supported by this plugin"));
             }
-            if !(has_u && has_v) || p.has("alpha") {
+            let (Some(u), Some(v), None) = (alpha_u, alpha_v, alpha) else {
                 return Err(p.error("give either 'alpha' or both 'alpha_u' and 'alpha_v'"));
-            }
-            let u = check(p.float_required("alpha_u")?, "alpha_u")?;
-            let v = check(p.float_required("alpha_v")?, "alpha_v")?;
-            return Ok((u, v));
+            };
+            return Ok((check(u, "alpha_u")?, check(v, "alpha_v")?));
         }
-        let a = check(p.float_or("alpha", 0.1)?, "alpha")?;
+        let a = check(alpha.unwrap_or(0.1), "alpha")?;
         Ok((a, a))
     }
 

@@ -31,6 +31,10 @@ impl<'a> Loader<'a> {
         if p.ty != "area" {
             return Err(p.error("only area emitters can be attached to shapes"));
         }
+        if let Some(mean) = self.untextured(&p, "radiance")? {
+            p.finish(&mut self.warnings);
+            return Ok(AreaEmission { radiance: mean, spectrum: None });
+        }
         let radiance = p
             .color("radiance", SpectrumUse::Emission, &mut self.warnings)?
             .ok_or_else(|| p.error("missing required property 'radiance'"))?;

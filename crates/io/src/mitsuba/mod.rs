@@ -41,6 +41,7 @@ mod props;
 mod search;
 mod sensor;
 mod shape;
+mod textured;
 mod transform;
 mod xml;
 
