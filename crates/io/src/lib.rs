@@ -11,6 +11,11 @@
 //! The format is chosen from the file extension (case-insensitive) by
 //! [`ImageFormat::from_path`]. All errors are [`ImageError`]s whose messages
 //! name the file; malformed or truncated input gives an error, never a panic.
+//!
+//! Textures are read by [`read_texture_file`] in more formats (JPEG, TGA, BMP,
+//! TIFF, GIF and 16-bit PNG besides the above), keeping the stored values apart
+//! from their transfer function ([`TextureFile::linear`]). Scene files are
+//! loaded by [`load_scene`] / [`load_scene_with`] ([`mitsuba`], [`pbrt`]).
 
 mod cylinder;
 mod error;
