@@ -75,6 +75,28 @@ pub enum ImageError {
         message: String,
     },
 
+    /// The path's extension is not one of the texture formats of
+    /// [`read_texture_file`](crate::read_texture_file).
+    #[error(
+        "unsupported texture image extension '.{extension}' in '{}' (expected one of .{})",
+        .path.display(), crate::TEXTURE_EXTENSIONS.join(", .")
+    )]
+    UnsupportedTexture {
+        /// The offending path.
+        path: PathBuf,
+        /// The extension, lower case, without the dot.
+        extension: String,
+    },
+
+    /// A texture file read through the `image` crate is malformed.
+    #[error("cannot decode texture image '{}': {message}", .path.display())]
+    TextureDecode {
+        /// The file being read.
+        path: PathBuf,
+        /// What was wrong with the contents.
+        message: String,
+    },
+
     /// An in-memory image operation got an image or parameter it cannot
     /// handle (no file is involved).
     #[error("{operation}: {message}")]
@@ -111,7 +133,9 @@ impl ImageError {
             | Self::Read { path, .. }
             | Self::Write { path, .. }
             | Self::Decode { path, .. }
-            | Self::Encode { path, .. } => Some(path),
+            | Self::Encode { path, .. }
+            | Self::UnsupportedTexture { path, .. }
+            | Self::TextureDecode { path, .. } => Some(path),
             Self::InvalidOperation { .. } => None,
         }
     }

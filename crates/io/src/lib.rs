@@ -11,12 +11,21 @@
 //! The format is chosen from the file extension (case-insensitive) by
 //! [`ImageFormat::from_path`]. All errors are [`ImageError`]s whose messages
 //! name the file; malformed or truncated input gives an error, never a panic.
+//!
+//! Textures are read by [`read_texture_file`] in more formats (JPEG, TGA, BMP,
+//! TIFF, GIF and 16-bit PNG besides the above), keeping the stored values apart
+//! from their transfer function ([`TextureFile::linear`]). Scene files are
+//! loaded by [`load_scene`] / [`load_scene_with`] ([`mitsuba`], [`pbrt`]).
 
+mod cylinder;
 mod error;
 mod exr_file;
+mod gz;
 mod linear_image;
+mod options;
 mod pfm;
 mod srgb;
+mod texture_file;
 mod via_image;
 
 use std::path::Path;
@@ -28,8 +37,10 @@ mod scene_error;
 
 pub use crate::error::ImageError;
 pub use crate::linear_image::{Image, MAX_PIXELS, downsample_box};
+pub use crate::options::{LoadOptions, LoadedScene, RenderSettings};
 pub use crate::scene_error::SceneError;
 pub use crate::srgb::{linear_to_srgb8, srgb_eotf, srgb_oetf, srgb8_to_linear};
+pub use crate::texture_file::{StoredValues, TEXTURE_EXTENSIONS, TextureEncoding, TextureFile, read_texture_file};
 
 /// An image file format supported by [`write_image`] and [`read_image`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -136,18 +147,33 @@ pub fn read_image(path: &Path) -> Result<Image, ImageError> {
 }
 
 /// Loads a scene file, choosing the format by extension: `.xml` (Mitsuba 3) or `.pbrt`
-/// (pbrt-v4). `defines` override Mitsuba `<default>` parameters; a `.pbrt` file with
-/// defines is an error.
+/// (pbrt-v4, also gzip-compressed `.pbrt.gz`). `defines` override Mitsuba `<default>`
+/// parameters; a `.pbrt` file with defines is an error. Strict: see [`load_scene_with`].
 pub fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<scene::desc::SceneDescription, SceneError> {
-    let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    match extension.as_deref() {
-        Some("xml") => mitsuba::load(path, defines),
+    load_scene_with(path, defines, &LoadOptions::default()).map(|loaded| loaded.description)
+}
+
+/// Loads a scene file as [`load_scene`] does, with `options`, and returns the file's
+/// rendering settings too. Without [`LoadOptions::permissive`], parameters that would change
+/// the image and are not supported are errors.
+pub fn load_scene_with(
+    path: &Path,
+    defines: &[(String, String)],
+    options: &LoadOptions,
+) -> Result<LoadedScene, SceneError> {
+    let name = path.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    let extension = name.strip_suffix(".gz").unwrap_or(&name).rsplit_once('.').map(|(_, e)| e);
+    match extension {
+        Some("xml") => mitsuba::load_with(path, defines, options),
         Some("pbrt") => {
             if let Some((name, _)) = defines.first() {
                 return Err(SceneError::in_file(path, format!("-D {name}=…: pbrt scenes have no parameters")));
             }
-            pbrt::load(path)
+            pbrt::load_with(path, options)
         }
-        _ => Err(SceneError::in_file(path, "unknown scene format (expected a .xml Mitsuba 3 or a .pbrt pbrt-v4 file)")),
+        _ => Err(SceneError::in_file(
+            path,
+            "unknown scene format (expected a .xml Mitsuba 3 or a .pbrt / .pbrt.gz pbrt-v4 file)",
+        )),
     }
 }

@@ -564,7 +564,7 @@ fn point_spot_and_distant_lights() {
     let text = format!(
         "{HEADER}Translate 1 0 0\n\
          LightSource \"point\" \"point3 from\" [0 2 0] \"rgb I\" [1 2 3] \"float scale\" 2\n\
-         LightSource \"spot\" \"point3 from\" [0 0 0] \"point3 to\" [0 -3 0] \"float coneangle\" 40 \"float conedelta\" 10 \"rgb I\" [5 5 5]\n\
+         LightSource \"spot\" \"point3 from\" [0 0 0] \"point3 to\" [0 -3 0] \"float coneangle\" 40 \"float conedeltaangle\" 10 \"rgb I\" [5 5 5]\n\
          Rotate 90 0 0 1\n\
          LightSource \"distant\" \"point3 from\" [0 0 0] \"point3 to\" [1 0 0] \"rgb L\" [0.5 0.5 0.5]\n"
     );
@@ -719,9 +719,9 @@ fn include_and_import_are_relative_to_the_including_file() {
     // The included Translate stays inside the block.
     assert_close(mesh(&d, 2).positions[1], Vec3::X, 0.0);
     // Errors inside an included file name that file.
-    fs::write(dir.join("sub/more.pbrt"), "Shape \"cylinder\"\n").unwrap();
+    fs::write(dir.join("sub/more.pbrt"), "Shape \"cone\"\n").unwrap();
     let e = io::pbrt::load(&dir.join("scene.pbrt")).unwrap_err().to_string();
-    assert!(e.contains("more.pbrt:1:7:") && e.contains("\"cylinder\" is not supported"), "{e}");
+    assert!(e.contains("more.pbrt:1:7:") && e.contains("\"cone\" is not supported"), "{e}");
     let e = load_err("include_missing", &format!("{HEADER}\nInclude \"missing.pbrt\"\n"));
     assert!(e.contains("scene.pbrt:4:9:") && e.contains("missing.pbrt"), "{e}");
 }

@@ -25,4 +25,4 @@ pub use material::{
     Bsdf, BsdfEval, BsdfSample, LobeKind, Material, PdfPair, ReferenceMaterial, ShadingPoint, TransportMode,
 };
 pub use scene::{LightSpectrum, Primitive, Scene, SurfaceHit};
-pub use texture::Texture;
+pub use texture::{FilterMode, Sampling, Texture, WrapMode};

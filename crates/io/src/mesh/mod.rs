@@ -40,7 +40,8 @@ pub fn read_obj(path: &Path) -> Result<MeshData, SceneError> {
     parse_obj(&read_file(path)?, path)
 }
 
-/// Reads a PLY file (ASCII or binary, little or big endian); see [`parse_ply`].
+/// Reads a PLY file (ASCII or binary, little or big endian; gzip-compressed files such as
+/// `.ply.gz` are decompressed first); see [`parse_ply`].
 pub fn read_ply(path: &Path) -> Result<MeshData, SceneError> {
     parse_ply(&read_file(path)?, path)
 }
@@ -101,8 +102,9 @@ pub fn parse_serialized(bytes: &[u8], shape_index: u32, path: &Path) -> Result<M
 }
 
 /// Reads a whole file, naming it in the error.
+/// The file's bytes, gunzipped when it is gzip-compressed (e.g. `.ply.gz`).
 fn read_file(path: &Path) -> Result<Vec<u8>, SceneError> {
-    std::fs::read(path).map_err(|e| SceneError::in_file(path, format!("cannot read the file: {e}")))
+    crate::gz::read_maybe_gzip(path).map_err(|e| SceneError::in_file(path, e))
 }
 
 /// The reader's common last step: [`MeshData::validate`], with the file named in the error.

@@ -4,9 +4,9 @@ use spectrum::ior::Ior;
 use std::sync::Arc;
 
 use math::Vec2;
-use scene::Texture;
 use scene::desc::{TextureImage, UvTransform};
 use scene::material::Material;
+use scene::{FilterMode, Sampling, Texture, WrapMode};
 use spectrum::Rgb;
 
 use super::Loader;
@@ -174,7 +174,7 @@ impl<'a> Loader<'a> {
     /// GGX roughness `(alpha_u, alpha_v)`: `alpha`, or both `alpha_u` and `alpha_v`; default
     /// 0.1. A Beckmann distribution (Mitsuba's default) is approximated by GGX with the same
     /// alpha, with a warning.
-    fn roughness(&mut self, p: &Plugin, anisotropic: bool) -> Result<(f32, f32), SceneError> {
+    fn roughness(&mut self, p: &Plugin<'a>, anisotropic: bool) -> Result<(f32, f32), SceneError> {
         let distribution = p.string("distribution")?.map(str::to_ascii_lowercase);
         match distribution.as_deref() {
             Some("ggx") => {}
@@ -193,19 +193,25 @@ impl<'a> Loader<'a> {
                 Err(p.error(format!("'{name}' must be a non-negative number, got {v}")))
             }
         };
-        let (has_u, has_v) = (p.has("alpha_u"), p.has("alpha_v"));
+        // A textured roughness: an error, or its mean in a permissive load.
+        let mut value = |name: &str| -> Result<Option<f64>, SceneError> {
+            match self.untextured(p, name)? {
+                Some(mean) => Ok(Some(f64::from(mean.r))),
+                None => p.float(name),
+            }
+        };
+        let (alpha, alpha_u, alpha_v) = (value("alpha")?, value("alpha_u")?, value("alpha_v")?);
+        let (has_u, has_v) = (alpha_u.is_some(), alpha_v.is_some());
         if has_u || has_v {
             if !anisotropic {
                 return Err(p.error("anisotropic roughness (alpha_u, alpha_v) is not supported by this plugin"));
             }
-            if !(has_u && has_v) || p.has("alpha") {
+            let (Some(u), Some(v), None) = (alpha_u, alpha_v, alpha) else {
                 return Err(p.error("give either 'alpha' or both 'alpha_u' and 'alpha_v'"));
-            }
-            let u = check(p.float_required("alpha_u")?, "alpha_u")?;
-            let v = check(p.float_required("alpha_v")?, "alpha_v")?;
-            return Ok((u, v));
+            };
+            return Ok((check(u, "alpha_u")?, check(v, "alpha_v")?));
         }
-        let a = check(p.float_or("alpha", 0.1)?, "alpha")?;
+        let a = check(alpha.unwrap_or(0.1), "alpha")?;
         Ok((a, a))
     }
 
@@ -252,27 +258,22 @@ impl<'a> Loader<'a> {
             "bitmap" => {
                 let filename = p.string_required("filename")?.to_string();
                 let raw = p.boolean_or("raw", false)?;
-                if let Some(wrap) = p.string("wrap_mode")?
-                    && wrap != "repeat"
-                {
-                    self.warnings.push(format!(
-                        "{}: {}: wrap_mode '{wrap}' not supported; textures repeat",
-                        node.pos.location(),
-                        p.what()
-                    ));
-                }
-                if let Some(filter) = p.string("filter_type")?
-                    && filter != "bilinear"
-                {
-                    self.warnings.push(format!(
-                        "{}: {}: filter_type '{filter}' not supported; textures are bilinearly interpolated",
-                        node.pos.location(),
-                        p.what()
-                    ));
-                }
+                let wrap = match p.string("wrap_mode")?.unwrap_or("repeat") {
+                    "repeat" => WrapMode::Repeat,
+                    "mirror" => WrapMode::Mirror,
+                    "clamp" => WrapMode::Clamp,
+                    other => {
+                        return Err(p.error(format!("wrap_mode '{other}' is not one of repeat, mirror, clamp")));
+                    }
+                };
+                let filter = match p.string("filter_type")?.unwrap_or("bilinear") {
+                    "bilinear" => FilterMode::Bilinear,
+                    "nearest" => FilterMode::Nearest,
+                    other => return Err(p.error(format!("filter_type '{other}' is not one of bilinear, nearest"))),
+                };
                 p.ignore(&["format"]);
                 let image = self.image(&filename, node, raw)?;
-                Texture::Bitmap { image, to_uv }
+                Texture::bitmap(image, to_uv, Sampling { wrap, filter })
             }
             "checkerboard" => {
                 let color = |loader: &mut Self, name: &str, default: f64| -> Result<Rgb, SceneError> {
@@ -289,29 +290,21 @@ impl<'a> Loader<'a> {
         Ok(texture)
     }
 
-    /// Reads an image file for a texture. 8-bit files are sRGB-decoded unless `raw`.
+    /// Reads an image file for a texture. Integer formats (8- and 16-bit) are sRGB-decoded
+    /// unless `raw`; float formats (EXR, HDR, PFM, float TIFF) are linear, as in Mitsuba.
     fn image(&mut self, filename: &str, node: &Node, raw: bool) -> Result<Arc<TextureImage>, SceneError> {
         let path = self.resolve_file(filename, node)?;
         let key = (path.clone(), raw);
         if let Some(image) = self.images.get(&key) {
             return Ok(image.clone());
         }
-        let image = crate::read_image(&path).map_err(|e| node.pos.error(format!("cannot read texture: {e}")))?;
-        let is_png = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        let file = crate::read_texture_file(&path).map_err(|e| node.pos.error(format!("cannot read texture: {e}")))?;
+        let encoding = if raw { crate::TextureEncoding::Linear } else { crate::TextureEncoding::Srgb };
+        let image = file.linear(encoding);
         let (Ok(width), Ok(height)) = (u32::try_from(image.width), u32::try_from(image.height)) else {
             return Err(node.pos.error(format!("texture '{}' is too large", path.display())));
         };
-        if width == 0 || height == 0 {
-            return Err(node.pos.error(format!("texture '{}' is empty", path.display())));
-        }
-        let pixels = image
-            .pixels
-            .iter()
-            .map(|p| {
-                let v = if raw && is_png { p.map(|c| crate::srgb_oetf(f64::from(c)) as f32) } else { *p };
-                Rgb::from_array(v)
-            })
-            .collect();
+        let pixels = image.pixels.iter().map(|&p| Rgb::from_array(p)).collect();
         let texture = Arc::new(TextureImage { width, height, pixels });
         self.images.insert(key, texture.clone());
         Ok(texture)

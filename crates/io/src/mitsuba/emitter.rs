@@ -31,6 +31,10 @@ impl<'a> Loader<'a> {
         if p.ty != "area" {
             return Err(p.error("only area emitters can be attached to shapes"));
         }
+        if let Some(mean) = self.untextured(&p, "radiance")? {
+            p.finish(&mut self.warnings);
+            return Ok(AreaEmission { radiance: mean, spectrum: None });
+        }
         let radiance = p
             .color("radiance", SpectrumUse::Emission, &mut self.warnings)?
             .ok_or_else(|| p.error("missing required property 'radiance'"))?;
@@ -85,6 +89,11 @@ impl<'a> Loader<'a> {
                 } else {
                     beam
                 };
+                if let Some(texture) = p.named_object("texture") {
+                    texture.take();
+                    let error = texture.node.pos.error(format!("{}: a projected 'texture' is not supported", p.what()));
+                    self.unsupported(error, "the spot light emits its uniform intensity")?;
+                }
                 LightDesc::Spot {
                     position: to_vec3(m.point([0.0; 3])),
                     direction: to_vec3(direction),

@@ -1,9 +1,11 @@
 //! Mitsuba 3 XML scene loader.
 //!
-//! The file is read into an element tree (`xml`): `<include>`s are spliced in (relative to the
-//! including file, then to the main scene file; cycles are errors), `<default>` parameters and
-//! the `-D` defines are substituted for `$name` in every attribute (defines win over defaults,
-//! an undefined parameter is an error), `<path>` is ignored with a warning. The tree is then
+//! The file is read into an element tree (`xml`): `<include>`s are spliced in (cycles are
+//! errors), `<default>` parameters and the `-D` defines are substituted for `$name` in every
+//! attribute (defines win over defaults, an undefined parameter is an error), `<path>`
+//! directories join the search path. Every file name (includes, meshes, textures) is looked
+//! up as Mitsuba 3 does: the `<path>` directories, latest first, then the scene file's
+//! directory (see `search`); a file not found is an error listing every path searched. The tree is then
 //! walked in document order; objects with an `id` may be referenced (`<ref id=…/>`, also
 //! `<ref name="reflectance" id=…/>` for textures) from anywhere in the scene, before or after
 //! their definition.
@@ -36,8 +38,10 @@ mod bsdf;
 mod colour;
 mod emitter;
 mod props;
+mod search;
 mod sensor;
 mod shape;
+mod textured;
 mod transform;
 mod xml;
 
@@ -50,6 +54,7 @@ use scene::desc::{CameraDesc, EmissionSpectra, FilmDesc, LightDesc, SceneDescrip
 use scene::material::Material;
 use spectrum::Rgb;
 
+use crate::options::{LoadOptions, LoadedScene, RenderSettings};
 use crate::scene_error::SceneError;
 use emitter::AreaEmission;
 use xml::Node;
@@ -75,18 +80,25 @@ mod colour_api {
 }
 
 /// Loads a Mitsuba 3 XML scene. `defines` are `name=value` pairs that override the file's
-/// `<default>` parameters (the `-D` option of the command line).
+/// `<default>` parameters (the `-D` option of the command line). Strict (see [`load_with`]).
 pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDescription, SceneError> {
+    load_with(path, defines, &LoadOptions::default()).map(|loaded| loaded.description)
+}
+
+/// Loads a Mitsuba 3 XML scene with `options` and returns the file's rendering settings
+/// (`<sampler>` `sample_count`, integrator `hide_emitters`) too.
+pub fn load_with(path: &Path, defines: &[(String, String)], options: &LoadOptions) -> Result<LoadedScene, SceneError> {
     let mut warnings = Vec::new();
     let parsed = xml::parse_scene(path, defines, &mut warnings)?;
-    let mut loader = Loader::new(path, warnings);
+    let mut loader = Loader::new(parsed.search.clone(), warnings, options.permissive);
     for node in &parsed.elements {
         loader.collect_ids(node)?;
     }
     for node in &parsed.elements {
         loader.top_level(node)?;
     }
-    loader.finish(path)
+    let settings = loader.settings;
+    Ok(LoadedScene { description: loader.finish(path)?, settings })
 }
 
 /// A resolved `<ref>` target.
@@ -112,7 +124,7 @@ impl Resolved {
 }
 
 pub(crate) struct Loader<'a> {
-    main_dir: PathBuf,
+    search: search::SearchPath,
     pub(crate) warnings: Vec<String>,
     ids: HashMap<String, &'a Node>,
     resolved: HashMap<String, Resolved>,
@@ -128,12 +140,16 @@ pub(crate) struct Loader<'a> {
     camera: Option<(CameraDesc, FilmDesc)>,
     max_path_length: Option<u32>,
     integrator_seen: bool,
+    /// The file's sample count and `hide_emitters`.
+    pub(crate) settings: RenderSettings,
+    /// Unsupported image-changing parameters are warnings instead of errors.
+    permissive: bool,
 }
 
 impl<'a> Loader<'a> {
-    fn new(path: &Path, warnings: Vec<String>) -> Self {
+    fn new(search: search::SearchPath, warnings: Vec<String>, permissive: bool) -> Self {
         Loader {
-            main_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            search,
             warnings,
             ids: HashMap::new(),
             resolved: HashMap::new(),
@@ -149,7 +165,15 @@ impl<'a> Loader<'a> {
             camera: None,
             max_path_length: None,
             integrator_seen: false,
+            settings: RenderSettings::default(),
+            permissive,
         }
+    }
+
+    /// Something in the file the renderer cannot reproduce: an error, or a warning saying what
+    /// is done `instead` when the load is permissive.
+    pub(crate) fn unsupported(&mut self, error: SceneError, instead: &str) -> Result<(), SceneError> {
+        crate::options::unsupported(self.permissive, &mut self.warnings, error, instead)
     }
 
     /// Registers every object with an `id`, at any depth.
@@ -192,26 +216,10 @@ impl<'a> Loader<'a> {
         Ok(result)
     }
 
-    /// A file named in the scene: relative to the main scene file, then to the file the
-    /// element is in.
+    /// A file named in the scene, looked up along the [`search::SearchPath`]; not found is an
+    /// error at `node` listing every path searched.
     pub(crate) fn resolve_file(&self, filename: &str, node: &Node) -> Result<PathBuf, SceneError> {
-        let relative = Path::new(filename);
-        let candidates: Vec<PathBuf> = if relative.is_absolute() {
-            vec![relative.to_path_buf()]
-        } else {
-            let mut c = vec![self.main_dir.join(relative)];
-            if let Some(dir) = node.pos.file.parent() {
-                let here = dir.join(relative);
-                if !c.contains(&here) {
-                    c.push(here);
-                }
-            }
-            c
-        };
-        candidates.iter().find(|p| p.is_file()).cloned().ok_or_else(|| {
-            let looked: Vec<String> = candidates.iter().map(|p| p.display().to_string()).collect();
-            node.pos.error(format!("file '{filename}' not found (looked for {})", looked.join(", ")))
-        })
+        self.search.find(filename, &node.pos.file).map_err(|e| node.pos.error(e))
     }
 
     /// The material index of the bsdf with id `id`.
@@ -301,7 +309,9 @@ impl<'a> Loader<'a> {
             "medium" | "phase" | "volume" => {
                 Err(node.pos.error(format!("<{}> (participating media) is not supported", node.tag)))
             }
-            "film" | "rfilter" | "sampler" => Err(node.pos.error(format!("<{}> must be inside a <sensor>", node.tag))),
+            "sampler" => self.sampler(node),
+            "film" if node.attr("type") == Some("ldrfilm") => Err(node.pos.error(xml::old_format("film 'ldrfilm'"))),
+            "film" | "rfilter" => Err(node.pos.error(format!("<{}> must be inside a <sensor>", node.tag))),
             other => Err(node.pos.error(format!("unknown element <{other}>"))),
         }
     }

@@ -104,6 +104,9 @@ impl<'a> Plugin<'a> {
     /// Parses the properties of `node`.
     pub fn new(node: &'a Node) -> Result<Plugin<'a>, SceneError> {
         let ty = node.required_attr("type")?.to_string();
+        if node.tag == "texture" && ty == "volume" {
+            return Err(node.pos.error("<texture type=\"volume\"> (a texture read from volume data) is not supported"));
+        }
         let mut plugin = Plugin { class: node.tag.clone(), ty, node, props: Vec::new(), objects: Vec::new() };
         for child in &node.children {
             let name = child.attr("name").map(str::to_string);

@@ -79,8 +79,10 @@ impl<'a> Loader<'a> {
                     }
                     film = Some(self.film(object.node)?);
                 }
-                // The iteration count is chosen by the user.
-                "sampler" => object.take(),
+                "sampler" => {
+                    object.take();
+                    self.sampler(object.node)?;
+                }
                 _ => {}
             }
         }
@@ -187,6 +189,9 @@ impl<'a> Loader<'a> {
     /// A `<film>`.
     fn film(&mut self, node: &'a Node) -> Result<FilmDesc, SceneError> {
         let p = Plugin::new(node)?;
+        if p.ty == "ldrfilm" {
+            return Err(p.error(super::xml::old_format("film 'ldrfilm'")));
+        }
         if p.ty != "hdrfilm" {
             return Err(p.error(format!("unsupported film type '{}'", p.ty)));
         }
@@ -229,10 +234,8 @@ impl<'a> Loader<'a> {
                 if let Some(r) = p.float("radius")?
                     && (r - 0.5).abs() > 1e-6
                 {
-                    self.warnings.push(format!(
-                        "{}: rfilter 'box': radius {r} not supported; 0.5 pixel used",
-                        node.pos.location()
-                    ));
+                    let error = p.error(format!("rfilter 'box': radius {r} is not supported (only 0.5)"));
+                    self.unsupported(error, "0.5 pixel used")?;
                 }
                 FilterDesc::Box
             }
@@ -248,14 +251,47 @@ impl<'a> Loader<'a> {
         Ok(filter)
     }
 
-    /// An `<integrator>`: only its maximum path length is used.
-    pub(crate) fn integrator(&mut self, node: &'a Node) -> Result<(), SceneError> {
+    /// A `<sampler>` (in the `<sensor>` or at the top level): only its `sample_count` is used
+    /// (returned in [`RenderSettings`](crate::RenderSettings); the sampler type changes the
+    /// noise, not the expected image). A second sampler is an error.
+    pub(crate) fn sampler(&mut self, node: &'a Node) -> Result<(), SceneError> {
         let p = Plugin::new(node)?;
+        if self.settings.samples_per_pixel.is_some() {
+            return Err(p.error("a second <sampler> (only one sample count can apply)"));
+        }
+        // Mitsuba's default sample count is 4.
+        let count = p.integer("sample_count")?.unwrap_or(4);
+        let count = u32::try_from(count)
+            .ok()
+            .filter(|&c| c > 0)
+            .ok_or_else(|| p.error(format!("'sample_count' {count} must be ≥ 1")))?;
+        self.settings.samples_per_pixel = Some(count);
+        p.ignore(&["seed", "jitter", "strength", "scramble_seed", "dimension", "sample_dimension"]);
+        p.finish(&mut self.warnings);
+        Ok(())
+    }
+
+    /// An `<integrator>`: its maximum path length and `hide_emitters` are used. `aov` and
+    /// `moment` wrap other integrators: the first nested `<integrator>` gives the depth.
+    pub(crate) fn integrator(&mut self, node: &'a Node) -> Result<(), SceneError> {
         if self.integrator_seen {
             self.warnings.push(format!("{}: second <integrator> ignored", node.pos.location()));
             return Ok(());
         }
         self.integrator_seen = true;
+        self.max_path_length = self.integrator_depth(node)?;
+        if self.max_path_length == Some(0) {
+            self.warnings.push(format!(
+                "{}: max_depth 0: no light reaches the camera (the image is black)",
+                node.pos.location()
+            ));
+        }
+        Ok(())
+    }
+
+    /// The path length in segments of `node` and of the integrators it wraps.
+    fn integrator_depth(&mut self, node: &'a Node) -> Result<Option<u32>, SceneError> {
+        let p = Plugin::new(node)?;
         let max_depth = p.integer("max_depth")?;
         let depth = match max_depth {
             None | Some(-1) => None,
@@ -263,7 +299,7 @@ impl<'a> Loader<'a> {
             Some(d) => Some(u32::try_from(d).map_err(|_| p.error(format!("'max_depth' {d} is too large")))?),
         };
         let where_ = node.pos.location();
-        self.max_path_length = match p.ty.as_str() {
+        let result = match p.ty.as_str() {
             "path" | "volpath" | "volpathmis" | "bdpt" | "ptracer" | "prb" | "prbvolpath" => depth,
             "direct" => {
                 self.warnings.push(format!(
@@ -272,20 +308,39 @@ impl<'a> Loader<'a> {
                 p.ignore(&["emitter_samples", "bsdf_samples", "shading_samples"]);
                 Some(2)
             }
+            "aov" | "moment" => {
+                let nested = p.objects.iter().find(|o| o.node.tag == "integrator");
+                self.warnings.push(format!(
+                    "{where_}: integrator '{}' is not supported; only the image of the integrator it wraps is rendered",
+                    p.ty
+                ));
+                p.ignore(&["aovs"]);
+                match nested {
+                    Some(inner) => {
+                        for o in p.objects.iter().filter(|o| o.node.tag == "integrator") {
+                            o.take();
+                        }
+                        self.integrator_depth(inner.node)?
+                    }
+                    None => depth,
+                }
+            }
             other => {
-                self.warnings
-                    .push(format!("{where_}: integrator '{other}' is not supported; only its max_depth is used"));
+                let error = p.error(format!("integrator '{other}' is not supported"));
+                self.unsupported(error, "rendered with its max_depth by the chosen algorithm")?;
                 depth
             }
         };
-        if self.max_path_length == Some(0) {
-            self.warnings.push(format!("{where_}: max_depth 0: no light reaches the camera (the image is black)"));
-        }
         if p.boolean_or("hide_emitters", false)? {
-            self.warnings.push(format!("{where_}: 'hide_emitters' is not supported; emitters stay visible"));
+            let pos = p.prop("hide_emitters").map_or_else(|| node.pos.clone(), |q| q.pos.clone());
+            self.unsupported(
+                pos.error(format!("{}: 'hide_emitters' true is not supported by the renderer", p.what())),
+                "emitters stay visible",
+            )?;
+            self.settings.hide_emitters = true;
         }
         p.ignore(&["rr_depth", "samples_per_pass", "timeout"]);
         p.finish(&mut self.warnings);
-        Ok(())
+        Ok(result)
     }
 }

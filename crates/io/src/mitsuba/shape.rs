@@ -1,4 +1,5 @@
-//! `<shape>` plugins: meshes from files, Mitsuba's analytic rectangle, cube, sphere and disk.
+//! `<shape>` plugins: meshes from files, Mitsuba's analytic rectangle, cube, sphere and disk,
+//! and its cylinder as a tessellated mesh (see `crate::cylinder`).
 
 use math::{Vec2, Vec3};
 use scene::desc::{Geometry, MeshData, ShapeDesc};
@@ -148,6 +149,40 @@ impl<'a> Loader<'a> {
                     &to_world,
                     flip,
                     face_normals,
+                    &node.pos,
+                    &what,
+                    &mut self.warnings,
+                )?)
+            }
+            "cylinder" => {
+                let p0 = p.vector("p0")?.unwrap_or([0.0; 3]);
+                let p1 = p.vector("p1")?.unwrap_or([0.0, 0.0, 1.0]);
+                let radius = p.float_or("radius", 1.0)?;
+                if !positive(radius) {
+                    return Err(p.error(format!("'radius' must be positive, got {radius}")));
+                }
+                let axis = [p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]];
+                let height = length(axis);
+                let n =
+                    normalize(axis).filter(|_| positive(height)).ok_or_else(|| p.error("'p0' and 'p1' coincide"))?;
+                // Mitsuba: to_world · translate(p0) · frame(axis) · scale(r, r, height), the frame's
+                // tangents from the branchless orthonormal basis of Duff et al. (2017).
+                let sign = 1f64.copysign(n[2]);
+                let a = -1.0 / (sign + n[2]);
+                let b = n[0] * n[1] * a;
+                let s_axis = [1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]];
+                let t_axis = [b, sign + n[1] * n[1] * a, -n[1]];
+                let frame = Mat4::from_columns(
+                    s_axis.map(|v| v * radius),
+                    t_axis.map(|v| v * radius),
+                    n.map(|v| v * height),
+                    p0,
+                );
+                Geometry::Mesh(transform_mesh(
+                    crate::cylinder::cylinder_mesh(1.0, 0.0, 1.0, std::f64::consts::TAU),
+                    &to_world.mul(&frame),
+                    flip,
+                    false,
                     &node.pos,
                     &what,
                     &mut self.warnings,

@@ -23,6 +23,15 @@ impl Mat4 {
         r
     }
 
+    /// The affine map taking the unit axes to `x`, `y`, `z` and the origin to `origin`.
+    pub fn from_columns(x: [f64; 3], y: [f64; 3], z: [f64; 3], origin: [f64; 3]) -> Mat4 {
+        let mut r = Mat4::IDENTITY;
+        for row in 0..3 {
+            r.m[row] = [x[row], y[row], z[row], origin[row]];
+        }
+        r
+    }
+
     /// A scale by `s` along the axes.
     pub fn scale(s: [f64; 3]) -> Mat4 {
         let mut r = Mat4::IDENTITY;

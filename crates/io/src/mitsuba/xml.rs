@@ -1,11 +1,12 @@
 //! Reading Mitsuba XML files into an owned element tree: `<include>` expanded in place,
 //! `<default>` parameters collected and `$name` substituted in every attribute, `<path>`
-//! dropped with a warning. Every element remembers its file, line and column.
+//! directories added to the [`SearchPath`]. Every element remembers its file, line and column.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use super::search::SearchPath;
 use crate::scene_error::SceneError;
 
 /// Where an element starts.
@@ -56,10 +57,12 @@ impl Node {
     }
 }
 
-/// The parsed scene: the root's children and the root's `version` attribute.
+/// The parsed scene: the root's children and the search path its `<path>`s declare.
 pub(crate) struct ParsedScene {
     /// Top-level elements in document order (includes spliced in).
     pub elements: Vec<Node>,
+    /// Where files named in the elements are looked for.
+    pub search: SearchPath,
 }
 
 /// Reads `path` and everything it includes.
@@ -71,11 +74,11 @@ pub(crate) fn parse_scene(
     let mut reader = Reader {
         params: defines.iter().cloned().collect(),
         stack: Vec::new(),
-        main_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        search: SearchPath::new(path),
         warnings,
     };
     let elements = reader.read_file(path, None)?;
-    Ok(ParsedScene { elements })
+    Ok(ParsedScene { elements, search: reader.search })
 }
 
 struct Reader<'w> {
@@ -83,8 +86,8 @@ struct Reader<'w> {
     params: HashMap<String, String>,
     /// Canonical paths of the files being read (include cycle detection).
     stack: Vec<PathBuf>,
-    /// Directory of the main scene file.
-    main_dir: PathBuf,
+    /// The scene file's directory and the `<path>`s read so far.
+    search: SearchPath,
     warnings: &'w mut Vec<String>,
 }
 
@@ -122,10 +125,7 @@ impl Reader<'_> {
                 let major = v.split('.').next().and_then(|m| m.trim().parse::<u32>().ok());
                 match major {
                     Some(m) if m >= 2 => {}
-                    Some(_) => self.warnings.push(format!(
-                        "{}: scene version {v} predates Mitsuba 2/3; old-style property names are not converted",
-                        root_pos.location()
-                    )),
+                    Some(_) => return Err(root_pos.error(old_format(&format!("scene version {v}")))),
                     None => return Err(root_pos.error(format!("bad scene version '{v}'"))),
                 }
             }
@@ -173,19 +173,32 @@ impl Reader<'_> {
                 }
                 "include" => {
                     let filename = node.required_attr("filename")?;
-                    let resolved = self.resolve_include(file, filename);
-                    let Some(resolved) = resolved else {
-                        return Err(node.pos.error(format!("included file '{filename}' not found")));
-                    };
+                    let resolved =
+                        self.search.find(filename, file).map_err(|e| node.pos.error(format!("<include>: {e}")))?;
                     let included = self.read_file(&resolved, Some(&node.pos))?;
                     out.extend(included);
                 }
                 "path" => {
-                    self.warnings.push(format!(
-                        "{}: <path value=\"{}\"> ignored (files are looked up next to the scene file)",
-                        node.pos.location(),
-                        node.attr("value").unwrap_or("")
-                    ));
+                    if parent.parent().is_some_and(|p| p.is_element()) {
+                        return Err(node.pos.error("<path> must be a child of the <scene> root"));
+                    }
+                    let value = node.required_attr("value")?;
+                    let declared = Path::new(value);
+                    let dir = match file.parent() {
+                        Some(here) if !declared.is_absolute() => here.join(declared),
+                        _ => declared.to_path_buf(),
+                    };
+                    if dir.is_dir() {
+                        self.search.declare(dir);
+                    } else {
+                        self.warnings.push(format!(
+                            "{}: <path value=\"{value}\">: directory '{}' not found (relative to the file that \
+                             declares it); ignored",
+                            node.pos.location(),
+                            dir.display()
+                        ));
+                        self.search.declare_missing(node.pos.location(), dir);
+                    }
                 }
                 _ => {
                     let children = self.children(doc, file, child)?;
@@ -194,17 +207,6 @@ impl Reader<'_> {
             }
         }
         Ok(out)
-    }
-
-    /// An included file: relative to the including file, then to the main scene file.
-    fn resolve_include(&self, including: &Path, filename: &str) -> Option<PathBuf> {
-        let relative = Path::new(filename);
-        if relative.is_absolute() {
-            return relative.exists().then(|| relative.to_path_buf());
-        }
-        let here = including.parent().map(|d| d.join(relative));
-        let main = self.main_dir.join(relative);
-        here.into_iter().chain(std::iter::once(main)).find(|p| p.exists())
     }
 
     /// Replaces every `$name` (name = letters, digits, `_`) by the parameter's value.
@@ -238,4 +240,12 @@ impl Reader<'_> {
 fn position(doc: &roxmltree::Document, file: &Arc<PathBuf>, node: roxmltree::Node) -> Pos {
     let p = doc.text_pos_at(node.range().start);
     Pos { file: file.clone(), line: p.row, column: p.col }
+}
+
+/// The message for a file in the format of Mitsuba 0.x (before Mitsuba 2), named by `what`.
+pub(crate) fn old_format(what: &str) -> String {
+    format!(
+        "{what}: this is a Mitsuba 0.x scene file (before Mitsuba 2), an old format that is not supported; \
+         convert it to the Mitsuba 3 format (version 3.x: snake_case property names, hdrfilm, …)"
+    )
 }

@@ -38,9 +38,11 @@
 //! - **Image environment maps** are resampled from pbrt's equal-area octahedral square to
 //!   lat-long (see [`envmap`]).
 //! - **File names** (`Include`, `Import`, meshes, images) are relative to the directory of the
-//!   file that names them. `Import` is treated as `Include`.
+//!   file that names them. `Import` is treated as `Include`. Gzip-compressed scene and PLY
+//!   files (`.pbrt.gz`, `.ply.gz`; recognised by their content) are decompressed.
 //! - **Unsupported** features are errors naming them (object instancing, media, textures other
-//!   than `imagemap`/`checkerboard`/`constant`, `coateddiffuse` and other layered materials, …);
+//!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `coateddiffuse` and other layered
+//!   materials, …);
 //!   unsupported optional parameters are warnings in [`SceneDescription::warnings`].
 
 pub mod color;
@@ -59,10 +61,11 @@ use scene::desc::{
     SceneDescription, ShapeDesc, TextureImage, UvTransform,
 };
 use scene::material::Material;
-use scene::texture::Texture;
+use scene::texture::{FilterMode, Sampling, Texture, WrapMode};
 use spectrum::Rgb;
 use spectrum::tabulated::Tabulated;
 
+use crate::options::{LoadOptions, LoadedScene, RenderSettings};
 use crate::pbrt::parser::{Directive, ParamSet, Parser, Value};
 use crate::pbrt::tokenizer::Pos;
 use crate::pbrt::transform::{Mat4, V3, dot, norm, normalize};
@@ -74,15 +77,21 @@ const MAX_INCLUDE_DEPTH: usize = 32;
 /// Below this GGX α on both axes a surface counts as smooth (pbrt-v4's `EffectivelySmooth`).
 const SMOOTH_ALPHA: f32 = 1e-3;
 
-/// Loads a pbrt-v4 scene.
+/// Loads a pbrt-v4 scene (strict: see [`load_with`]).
 ///
 /// Errors name the file, line and column and what was expected: unknown directives, shape,
 /// material, light and texture types, unsupported features, parameters of the wrong type or
 /// count, unbalanced `AttributeBegin`/`AttributeEnd`, missing files and malformed numbers.
 pub fn load(path: &Path) -> Result<SceneDescription, SceneError> {
-    let mut builder = Builder::new();
+    load_with(path, &LoadOptions::default()).map(|loaded| loaded.description)
+}
+
+/// Loads a pbrt-v4 scene with `options` and returns the file's `Sampler` `pixelsamples` too.
+pub fn load_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    let mut builder = Builder::new(options.permissive);
     builder.run_file(path, None, 0)?;
-    builder.finish(path)
+    let settings = builder.settings;
+    Ok(LoadedScene { description: builder.finish(path)?, settings })
 }
 
 /// The state that `AttributeBegin` saves.
@@ -140,6 +149,10 @@ struct Builder {
     lights: Vec<LightDesc>,
     emission_spectra: EmissionSpectra,
     warnings: Vec<String>,
+    /// The `Sampler`'s sample count.
+    settings: RenderSettings,
+    /// Unsupported image-changing parameters are warnings instead of errors.
+    permissive: bool,
 }
 
 fn f32v(a: V3) -> Vec3 {
@@ -151,7 +164,7 @@ fn err(file: &Path, pos: Pos, message: impl Into<String>) -> SceneError {
 }
 
 impl Builder {
-    fn new() -> Self {
+    fn new(permissive: bool) -> Self {
         Self {
             world: false,
             state: GraphicsState {
@@ -176,7 +189,15 @@ impl Builder {
             lights: Vec::new(),
             emission_spectra: EmissionSpectra::default(),
             warnings: Vec::new(),
+            settings: RenderSettings::default(),
+            permissive,
         }
+    }
+
+    /// Something in the file the renderer cannot reproduce: an error, or a warning saying what
+    /// is done `instead` when the load is permissive.
+    fn unsupported(&mut self, error: SceneError, instead: &str) -> Result<(), SceneError> {
+        crate::options::unsupported(self.permissive, &mut self.warnings, error, instead)
     }
 
     fn warn(&mut self, file: &Path, pos: Pos, message: impl AsRef<str>) {
@@ -190,13 +211,11 @@ impl Builder {
 
     /// Parses and runs one file; `from` is the including directive for messages.
     fn run_file(&mut self, path: &Path, from: Option<(&Path, Pos)>, depth: usize) -> Result<(), SceneError> {
-        let text = std::fs::read(path).map_err(|e| match from {
-            Some((file, pos)) => err(file, pos, format!("cannot read '{}': {e}", path.display())),
-            None => SceneError::in_file(path, format!("cannot read the file: {e}")),
+        let text = crate::gz::read_maybe_gzip(path).map_err(|e| match from {
+            Some((file, pos)) => err(file, pos, format!("'{}': {e}", path.display())),
+            None => SceneError::in_file(path, e),
         })?;
-        let text = String::from_utf8(text).map_err(|_| {
-            SceneError::in_file(path, "not a UTF-8 text file (compressed .pbrt.gz files are not supported)")
-        })?;
+        let text = String::from_utf8(text).map_err(|_| SceneError::in_file(path, "not a UTF-8 text file"))?;
         let tokens = tokenizer::tokenize(path, &text)?;
         let mut parser = Parser::new(path, tokens);
         while let Some(directive) = parser.next_directive()? {
@@ -329,9 +348,32 @@ impl Builder {
                     return Err(d.params.error(pos, format!("maxdepth {depth} is negative")));
                 }
                 self.max_path_length = Some(u32::try_from(depth + 1).unwrap_or(u32::MAX));
+                // Integrators that estimate something else than the light transport.
+                if let ty @ ("ambientocclusion" | "aov") = d.str_arg(0) {
+                    let pos = d.arg_pos[0];
+                    self.unsupported(
+                        err(file, pos, format!("Integrator \"{ty}\" is not supported")),
+                        "rendered with its maxdepth by the chosen algorithm",
+                    )?;
+                }
+                if d.params.bool("regularize", false)? {
+                    let pos = d.params.find("regularize").map_or(d.pos, |p| p.pos);
+                    self.unsupported(d.params.error(pos, "\"regularize\" true is not supported"), "no regularisation")?;
+                }
                 self.warn_unused(&d.params);
             }
-            "Sampler" | "Accelerator" => self.require_world(file, &d, false)?,
+            "Sampler" => {
+                self.require_world(file, &d, false)?;
+                // pbrt-v4's default is 16 samples per pixel. The sampler type and its other
+                // parameters change the noise, not the expected image.
+                let count = d.params.int("pixelsamples", 16)?;
+                let count = u32::try_from(count).ok().filter(|&c| c > 0).ok_or_else(|| {
+                    let pos = d.params.find("pixelsamples").map_or(d.pos, |p| p.pos);
+                    d.params.error(pos, format!("pixelsamples {count} must be ≥ 1"))
+                })?;
+                self.settings.samples_per_pixel = Some(count);
+            }
+            "Accelerator" => self.require_world(file, &d, false)?,
             "WorldBegin" => {
                 self.require_world(file, &d, false)?;
                 self.world = true;
@@ -776,17 +818,50 @@ impl Builder {
                     return Err(err(file, d.pos, "imagemap texture needs a \"string filename\""));
                 };
                 let path = resolve(file, &filename);
-                let image = crate::read_image(&path).map_err(|e| p.error(fpos, format!("cannot read image: {e}")))?;
-                let encoding = p.string("encoding")?;
-                let is_png = crate::ImageFormat::from_path(&path).is_ok_and(|f| f == crate::ImageFormat::Png);
-                let raw = match encoding {
-                    None => false,
-                    Some((e, _)) if e == "sRGB" => false,
-                    Some((e, _)) if e == "linear" => is_png,
-                    Some((e, epos)) => {
-                        return Err(p.error(epos, format!("encoding \"{e}\" is not supported (sRGB or linear)")));
+                let stored =
+                    crate::read_texture_file(&path).map_err(|e| p.error(fpos, format!("cannot read image: {e}")))?;
+                // pbrt-v4: `encoding` applies to 8-bit (here: every integer) images, default sRGB;
+                // float images are linear.
+                let encoding = match p.string("encoding")? {
+                    None => crate::TextureEncoding::Srgb,
+                    Some((e, _)) if e == "sRGB" => crate::TextureEncoding::Srgb,
+                    Some((e, _)) if e == "linear" => crate::TextureEncoding::Linear,
+                    Some((e, epos)) => match e.strip_prefix("gamma ").map(|g| g.trim().parse::<f32>()) {
+                        Some(Ok(g)) if g.is_finite() && g > 0.0 => crate::TextureEncoding::Gamma(g),
+                        _ => {
+                            return Err(p.error(
+                                epos,
+                                format!("encoding \"{e}\" is not one of \"sRGB\", \"linear\", \"gamma <g>\" (g > 0)"),
+                            ));
+                        }
+                    },
+                };
+                let image = stored.linear(encoding);
+                let filter = match p.string("filter")? {
+                    None => FilterMode::Bilinear,
+                    Some((f, _)) if f == "bilinear" => FilterMode::Bilinear,
+                    Some((f, _)) if f == "point" => FilterMode::Nearest,
+                    Some((f, fpos)) if f == "trilinear" || f == "ewa" || f == "EWA" => {
+                        self.unsupported(
+                            p.error(fpos, format!("imagemap filter \"{f}\" (MIP-mapping) is not supported")),
+                            "bilinear filtering used",
+                        )?;
+                        FilterMode::Bilinear
+                    }
+                    Some((f, fpos)) => {
+                        return Err(p.error(fpos, format!("unknown imagemap filter \"{f}\"")));
                     }
                 };
+                let wrap = match p.string("wrap")? {
+                    None => WrapMode::Repeat,
+                    Some((w, _)) if w == "repeat" => WrapMode::Repeat,
+                    Some((w, _)) if w == "clamp" => WrapMode::Clamp,
+                    Some((w, _)) if w == "black" => WrapMode::Black,
+                    Some((w, wpos)) => {
+                        return Err(p.error(wpos, format!("imagemap wrap \"{w}\" is not one of repeat, clamp, black")));
+                    }
+                };
+                p.float("maxanisotropy", 8.0)?;
                 let scale = p.float("scale", 1.0)?;
                 let invert = p.bool("invert", false)?;
                 let (su, sv, du, dv) = uv(p)?;
@@ -794,7 +869,7 @@ impl Builder {
                     .pixels
                     .iter()
                     .map(|px| {
-                        let mut c = px.map(|v| if raw { crate::srgb_oetf(f64::from(v)) as f32 } else { v });
+                        let mut c = *px;
                         if kind == "float" {
                             c = [c[0]; 3];
                         }
@@ -807,16 +882,38 @@ impl Builder {
                     .collect();
                 let image = Arc::new(TextureImage { width: image.width as u32, height: image.height as u32, pixels });
                 // pbrt looks up (s, 1 − t): t = 0 is the bottom row; our v' runs from the top.
-                Texture::Bitmap {
-                    image,
-                    to_uv: UvTransform {
-                        columns: [Vec2::new(su, 0.0), Vec2::new(0.0, -sv)],
-                        translation: Vec2::new(du, 1.0 - dv),
-                    },
+                let to_uv = UvTransform {
+                    columns: [Vec2::new(su, 0.0), Vec2::new(0.0, -sv)],
+                    translation: Vec2::new(du, 1.0 - dv),
+                };
+                Texture::bitmap(image, to_uv, Sampling { wrap, filter })
+            }
+            "scale" => {
+                let texture = self.spectrum_texture(p, "tex", Rgb::WHITE, false)?;
+                let scale = self.spectrum_texture(p, "scale", Rgb::WHITE, false)?;
+                match (texture.as_constant(), scale.as_constant()) {
+                    (Some(a), Some(b)) => Texture::Constant(a * b),
+                    _ => Texture::Scale { texture: Arc::new(texture), scale: Arc::new(scale) },
                 }
             }
-            other @ ("scale" | "mix" | "directionmix" | "bilerp" | "dots" | "fbm" | "wrinkled" | "windy" | "marble"
-            | "ptex") => return Err(err(file, d.arg_pos[2], format!("texture class \"{other}\" is not supported"))),
+            "mix" => {
+                let tex1 = self.spectrum_texture(p, "tex1", Rgb::BLACK, false)?;
+                let tex2 = self.spectrum_texture(p, "tex2", Rgb::WHITE, false)?;
+                let amount = self.spectrum_texture(p, "amount", Rgb::splat(0.5), false)?;
+                if let Some(a) = amount.as_constant()
+                    && !(0.0..=1.0).contains(&a.r)
+                {
+                    let pos = p.find("amount").map_or(d.pos, |x| x.pos);
+                    return Err(p.error(pos, format!("mix amount {} outside [0, 1] is not supported", a.r)));
+                }
+                match (tex1.as_constant(), tex2.as_constant(), amount.as_constant()) {
+                    (Some(a), Some(b), Some(t)) => Texture::Constant(a * (1.0 - t.r) + b * t.r),
+                    _ => Texture::Mix { tex1: Arc::new(tex1), tex2: Arc::new(tex2), amount: Arc::new(amount) },
+                }
+            }
+            other @ ("directionmix" | "bilerp" | "dots" | "fbm" | "wrinkled" | "windy" | "marble" | "ptex") => {
+                return Err(err(file, d.arg_pos[2], format!("texture class \"{other}\" is not supported")));
+            }
             other => return Err(err(file, d.arg_pos[2], format!("unknown texture class \"{other}\""))),
         };
         self.warn_unused(p);
@@ -1113,7 +1210,26 @@ impl Builder {
                     flip_normals: self.state.reverse_orientation,
                 }
             }
-            other @ ("cylinder" | "curve" | "loopsubdiv" | "cone" | "paraboloid" | "hyperboloid") => {
+            "cylinder" => {
+                let radius = f64::from(p.float("radius", 1.0)?);
+                let z_min = f64::from(p.float("zmin", -1.0)?);
+                let z_max = f64::from(p.float("zmax", 1.0)?);
+                let phi_max = f64::from(p.float("phimax", 360.0)?);
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return Err(err(file, d.pos, format!("cylinder radius {radius} must be positive")));
+                }
+                if !(z_min.is_finite() && z_max.is_finite() && z_min != z_max) {
+                    return Err(err(file, d.pos, format!("cylinder zmin {z_min} and zmax {z_max} must differ")));
+                }
+                if !(phi_max > 0.0 && phi_max <= 360.0) {
+                    return Err(err(file, d.pos, format!("cylinder phimax {phi_max} must be in (0, 360]")));
+                }
+                // pbrt swaps zmin and zmax when they are reversed.
+                let (z0, z1) = (z_min.min(z_max), z_min.max(z_max));
+                let object = crate::cylinder::cylinder_mesh(radius, z0, z1, phi_max.to_radians());
+                Geometry::Mesh(self.to_world_mesh(file, d.pos, object)?)
+            }
+            other @ ("curve" | "loopsubdiv" | "cone" | "paraboloid" | "hyperboloid") => {
                 return Err(err(file, d.arg_pos[0], format!("shape \"{other}\" is not supported")));
             }
             other => return Err(err(file, d.arg_pos[0], format!("unknown shape type \"{other}\""))),
@@ -1227,9 +1343,18 @@ impl Builder {
                 let from = point3("from", [0.0; 3])?;
                 let to = point3("to", [0.0, 0.0, 1.0])?;
                 let cone = p.float("coneangle", 30.0)?;
-                let delta = p.float("conedelta", 5.0)?;
+                if let Some(old) = p.find("conedelta") {
+                    return Err(
+                        p.error(old.pos, "spot: pbrt-v4 calls this parameter \"conedeltaangle\", not \"conedelta\"")
+                    );
+                }
+                let delta = p.float("conedeltaangle", 5.0)?;
                 if !(cone > 0.0 && cone <= 180.0 && (0.0..=cone).contains(&delta)) {
-                    return Err(err(file, d.pos, format!("spot: coneangle {cone} / conedelta {delta} out of range")));
+                    return Err(err(
+                        file,
+                        d.pos,
+                        format!("spot: coneangle {cone} / conedeltaangle {delta} out of range"),
+                    ));
                 }
                 let mut intensity = self.light_emission(p, "I").map(|(c, s)| {
                     spectrum = s.map(|s| (c, s));
