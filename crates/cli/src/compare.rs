@@ -18,9 +18,20 @@
 //!
 //! **Per-pixel Z-test** (only when both `--variance-a` and `--variance-b` are given: images of
 //! the same size holding the variance of the per-pixel mean estimate of each channel). For every
-//! compared entry, `z = (a − b) / sqrt(var_a + var_b)` (negative variances are treated as 0; a
-//! zero combined variance gives `z = 0` when `a == b` and `±∞` otherwise) and the two-sided
-//! p-value `p = erfc(|z| / √2)`. An entry fails when `p` is below the Šidák-corrected level
+//! compared entry, `z = (a − b) / sqrt(v)` with the combined variance
+//! `v = max(var_a + var_b, (f · max(|a|, |b|))²)` (negative variances are treated as 0) and the
+//! two-sided p-value `p = erfc(|z| / √2)`.
+//!
+//! The **variance floor** `f` ([`RELATIVE_FLOOR`] = 1e-3 by default, `--relative-floor`) is for
+//! entries that are deterministic in both images, e.g. a constant background seen by every
+//! sample: their variances are 0, so without the floor any rounding difference between two
+//! renderers (f32 arithmetic, half-float EXR storage with its relative step 2⁻¹¹ ≈ 4.9e-4) gives
+//! `z = ±∞` and fails the test. With it, such an entry fails only when it differs by more than
+//! about `z* · f` of its value, where `z*` is the Šidák-corrected critical value (5.3 for 10⁵
+//! entries at `α = 1e-3`: 0.5 %, so a 1 % difference still fails). The floor never matters where
+//! the images' own noise is larger than `f` of the value. When `a == b` (also both 0) `z = 0`;
+//! a difference between two zero-variance zeros and something else of the same tiny size is
+//! still `±∞` (the floor of 0 is 0). An entry fails when `p` is below the Šidák-corrected level
 //! `1 − (1 − α)^(1/3N)`, which keeps the family-wise false-alarm rate at `α` over all `3N`
 //! entries; the test passes when no entry fails.
 //!
@@ -42,6 +53,11 @@ use anyhow::{Context, Result, bail, ensure};
 /// The `ε` in the relative MSE's denominator `b² + ε`.
 pub const RELATIVE_MSE_EPSILON: f64 = 1e-2;
 
+/// Default variance floor of the per-pixel Z-test, relative to the value: the combined
+/// standard error of an entry is at least this times `max(|a|, |b|)` (see the module
+/// documentation).
+pub const RELATIVE_FLOOR: f64 = 1e-3;
+
 /// Channel names, in storage order.
 const CHANNELS: [&str; 3] = ["R", "G", "B"];
 
@@ -62,6 +78,12 @@ pub struct CompareArgs {
     /// Family-wise significance of the per-pixel Z-test (Šidák-corrected over all pixel channels).
     #[arg(long, default_value_t = 1e-3)]
     pub alpha: f64,
+    /// Variance floor of the Z-test, relative to the value: an entry's combined standard error
+    /// is at least F × max(|A|, |B|), so that pixels deterministic in both images (a constant
+    /// background: zero variance) pass when they differ only by rounding, and fail when they
+    /// differ by more than about 5 F of their value. 0 disables it.
+    #[arg(long, value_name = "F", default_value_t = RELATIVE_FLOOR)]
+    pub relative_floor: f64,
     /// Fail (exit code 1) when the relative MSE exceeds this.
     #[arg(long)]
     pub threshold: Option<f64>,
@@ -112,7 +134,8 @@ pub struct ZTest {
 }
 
 /// Computes the metrics of test image `a` against reference `b`, with the per-pixel Z-test at
-/// family-wise level `alpha` when `variance` (of A, of B) is given.
+/// family-wise level `alpha` when `variance` (of A, of B) is given, with the default variance
+/// floor [`RELATIVE_FLOOR`].
 ///
 /// Errors if the sizes differ, an image's pixel buffer does not match its size, `alpha` is not
 /// in (0, 1) while variances are given, or no pixel is finite in every input.
@@ -122,6 +145,22 @@ pub fn metrics(
     variance: Option<(&io::Image, &io::Image)>,
     alpha: f64,
 ) -> Result<Metrics> {
+    metrics_with_floor(a, b, variance, alpha, RELATIVE_FLOOR)
+}
+
+/// [`metrics`] with the Z-test's variance floor `relative_floor` (a fraction of the value, ≥ 0;
+/// see the module documentation). Errors also when `relative_floor` is negative or not finite.
+pub fn metrics_with_floor(
+    a: &io::Image,
+    b: &io::Image,
+    variance: Option<(&io::Image, &io::Image)>,
+    alpha: f64,
+    relative_floor: f64,
+) -> Result<Metrics> {
+    ensure!(
+        relative_floor.is_finite() && relative_floor >= 0.0,
+        "the Z-test's relative variance floor must be a non-negative number, got {relative_floor}"
+    );
     check_shape("A", a)?;
     check_shape("B", b)?;
     ensure!(
@@ -174,7 +213,9 @@ pub fn metrics(
             sum_a[c] += x;
             sum_b[c] += y;
             if let Some((va, vb)) = vars {
-                let se = (f64::from(va[c]).max(0.0) + f64::from(vb[c]).max(0.0)).sqrt();
+                let floor = relative_floor * x.abs().max(y.abs());
+                let variance = f64::from(va[c]).max(0.0) + f64::from(vb[c]).max(0.0);
+                let se = variance.max(floor * floor).sqrt();
                 let z = if d == 0.0 { 0.0 } else { d / se };
                 abs_z.push(z.abs());
                 if worst.is_none_or(|(w, ..)| z.abs() > w) {
@@ -220,6 +261,11 @@ pub fn run(args: CompareArgs) -> Result<ExitCode> {
         ensure!(t.is_finite() && t >= 0.0, "--threshold must be a non-negative number, got {t}");
     }
     ensure!(args.alpha > 0.0 && args.alpha < 1.0, "--alpha must be in (0, 1), got {}", args.alpha);
+    ensure!(
+        args.relative_floor.is_finite() && args.relative_floor >= 0.0,
+        "--relative-floor must be a non-negative number, got {}",
+        args.relative_floor
+    );
     let a = io::read_image(&args.a)?;
     let b = io::read_image(&args.b)?;
     check_same_size(&args.a, &a, &args.b, &b)?;
@@ -234,11 +280,11 @@ pub fn run(args: CompareArgs) -> Result<ExitCode> {
         (None, None) => None,
         _ => bail!("the Z-test needs both --variance-a and --variance-b"),
     };
-    let m = metrics(&a, &b, variances.as_ref().map(|(va, vb)| (va, vb)), args.alpha)
+    let m = metrics_with_floor(&a, &b, variances.as_ref().map(|(va, vb)| (va, vb)), args.alpha, args.relative_floor)
         .with_context(|| format!("cannot compare '{}' with '{}'", args.a.display(), args.b.display()))?;
 
     let mut failed = false;
-    let mut text = report(&args.a, &args.b, (a.width, a.height), &m, args.alpha);
+    let mut text = report(&args.a, &args.b, (a.width, a.height), &m, args.alpha, args.relative_floor);
     if let Some(threshold) = args.threshold {
         let pass = m.relative_mse <= threshold;
         failed |= !pass;
@@ -264,7 +310,14 @@ pub fn run(args: CompareArgs) -> Result<ExitCode> {
 }
 
 /// The human-readable table printed by [`run`] (without the threshold line).
-fn report(path_a: &Path, path_b: &Path, (width, height): (usize, usize), m: &Metrics, alpha: f64) -> String {
+fn report(
+    path_a: &Path,
+    path_b: &Path,
+    (width, height): (usize, usize),
+    m: &Metrics,
+    alpha: f64,
+    relative_floor: f64,
+) -> String {
     let mut t = String::new();
     let _ = writeln!(t, "test (A):       {}", path_a.display());
     let _ = writeln!(t, "reference (B):  {}", path_b.display());
@@ -285,7 +338,7 @@ fn report(path_a: &Path, path_b: &Path, (width, height): (usize, usize), m: &Met
         let _ = writeln!(
             t,
             "per-pixel Z-test: {} entries, worst z {:.3} at ({}, {}) channel {}, p threshold {:.3e} \
-             (alpha {alpha}, Šidák), {} failing: {}",
+             (alpha {alpha}, Šidák; variance floor {relative_floor} of the value), {} failing: {}",
             z.entries,
             z.worst_z,
             z.worst_pixel.0,
@@ -512,13 +565,42 @@ mod tests {
     }
 
     #[test]
-    fn zero_variance_fails_any_difference() {
+    fn zero_variance_without_a_floor_fails_any_difference() {
         let a = gradient();
         let zero = constant(&a, 0.0);
-        let z = metrics(&a, &a, Some((&zero, &zero)), 1e-3).unwrap().z_test.unwrap();
+        let z = metrics_with_floor(&a, &a, Some((&zero, &zero)), 1e-3, 0.0).unwrap().z_test.unwrap();
         assert!(z.passed);
-        let z = metrics(&offset(&a, 1e-3), &a, Some((&zero, &zero)), 1e-3).unwrap().z_test.unwrap();
+        let z = metrics_with_floor(&offset(&a, 1e-3), &a, Some((&zero, &zero)), 1e-3, 0.0).unwrap().z_test.unwrap();
         assert!(!z.passed && z.worst_z.is_infinite());
+        assert!(metrics_with_floor(&a, &a, Some((&zero, &zero)), 1e-3, -1.0).is_err());
+    }
+
+    /// Scales every value of `image` by `factor`.
+    fn scaled(image: &io::Image, factor: f32) -> io::Image {
+        io::Image { pixels: image.pixels.iter().map(|p| p.map(|v| v * factor)).collect(), ..image.clone() }
+    }
+
+    #[test]
+    fn zero_variance_entries_get_a_floor_relative_to_their_value() {
+        // A deterministic image (zero variance everywhere) against itself changed by rounding
+        // (one half-float step, 2⁻¹¹ relative) passes; the same image 1 % brighter fails every
+        // non-zero entry, at z = 0.01 / (1.01 · 1e-3) ≈ 9.9.
+        let a = image(30, 20, |x, y| [0.2 + 0.01 * x as f32, 0.5 + 0.02 * y as f32, 3.0]);
+        let zero = constant(&a, 0.0);
+        let rounded = scaled(&a, 1.0 + 2f32.powi(-11));
+        let z = metrics(&rounded, &a, Some((&zero, &zero)), 1e-3).unwrap().z_test.unwrap();
+        assert!(z.passed && z.failing == 0, "{z:?}");
+        assert!(z.worst_z > 0.45 && z.worst_z < 0.5, "{z:?}");
+        let brighter = scaled(&a, 1.01);
+        let z = metrics(&brighter, &a, Some((&zero, &zero)), 1e-3).unwrap().z_test.unwrap();
+        assert!(!z.passed && z.failing == 1800, "{z:?}");
+        assert!((z.worst_z - 0.01 / 1.01e-3).abs() < 1e-3, "{z:?}");
+        // Where the images' own variance exceeds the floor, the floor changes nothing: z of a
+        // 1e-3 offset on variances 1e-6 is 1e-3 / √2e-6 ≈ 0.707 for every entry whose value is
+        // below √2e-6 / 1e-3 ≈ 1.41 (the blue channel, 3.0, is limited by the floor: 0.33).
+        let v = constant(&a, 1e-6);
+        let z = metrics(&offset(&a, 1e-3), &a, Some((&v, &v)), 1e-3).unwrap().z_test.unwrap();
+        assert!((z.worst_z - 1e-3 / 2e-6f64.sqrt()).abs() < 1e-3, "{z:?}");
     }
 
     #[test]

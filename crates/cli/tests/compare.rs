@@ -1,5 +1,6 @@
 //! End-to-end tests of `vcm compare`: metrics of identical and offset images, the exit code of
-//! `--threshold` and of the per-pixel Z-test, non-finite pixels, size mismatches and `--diff`.
+//! `--threshold` and of the per-pixel Z-test (with its variance floor for deterministic pixels),
+//! non-finite pixels, size mismatches and `--diff`.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -158,6 +159,61 @@ fn z_test_fails_an_offset_and_passes_identical_images() {
     let noisy = write(&dir, "noisy.pfm", &constant(&a_image, 1e-2));
     let output = vcm(&["compare", path(&a), path(&b), "--variance-a", path(&noisy), "--variance-b", path(&noisy)]);
     assert_eq!(output.status.code(), Some(0), "{}{}", stdout(&output), stderr(&output));
+}
+
+/// A deterministic background (constant 0.25, 0.5, 1.0: zero variance, like a constant
+/// environment seen by every sample) around a noisy 4×4 object (variance 1e-4 per channel).
+fn background_and_object(noise_sign: f32, background_factor: f32) -> (io::Image, io::Image) {
+    let object = |x: usize, y: usize| (2..6).contains(&x) && (1..5).contains(&y);
+    let image = io::Image::from_fn(8, 6, |x, y| {
+        if object(x, y) {
+            // Within ±1 standard error (0.01) of 0.3.
+            [0.3 + noise_sign * 0.005 * ((x + y) % 3) as f32; 3]
+        } else {
+            [0.25 * background_factor, 0.5 * background_factor, background_factor]
+        }
+    });
+    let variance = io::Image::from_fn(8, 6, |x, y| if object(x, y) { [1e-4; 3] } else { [0.0; 3] });
+    (image, variance)
+}
+
+#[test]
+fn zero_variance_background_passes_rounding_and_fails_a_real_difference() {
+    let dir = temp_dir("variance-floor");
+    let (reference, reference_variance) = background_and_object(1.0, 1.0);
+    let a = write(&dir, "reference.pfm", &reference);
+    let va = write(&dir, "reference-variance.pfm", &reference_variance);
+    let compare = |b_image: &io::Image, b_variance: &io::Image, name: &str, extra: &[&str]| {
+        let b = write(&dir, &format!("{name}.pfm"), b_image);
+        let vb = write(&dir, &format!("{name}-variance.pfm"), b_variance);
+        // The other image is the test image A, the deterministic one the reference B.
+        let mut args = vec!["compare", path(&b), path(&a), "--variance-a", path(&vb), "--variance-b", path(&va)];
+        args.extend_from_slice(extra);
+        vcm(&args)
+    };
+    // The same scene by "another renderer": other noise on the object, the background off by
+    // rounding (one half-float step, 2⁻¹¹ relative). 144 entries, 96 of them deterministic.
+    let (rounded, rounded_variance) = background_and_object(-1.0, 1.0 + 2f32.powi(-11));
+    let output = compare(&rounded, &rounded_variance, "rounded", &[]);
+    let text = stdout(&output);
+    assert_eq!(output.status.code(), Some(0), "{text}{}", stderr(&output));
+    assert!(text.contains("per-pixel Z-test: 144 entries") && text.contains("0 failing: PASSED"), "{text}");
+    assert!(text.contains("variance floor 0.001 of the value"), "{text}");
+    // Without the floor, the rounding fails every background entry with an infinite z.
+    let output = compare(&rounded, &rounded_variance, "rounded", &["--relative-floor", "0"]);
+    let text = stdout(&output);
+    assert_eq!(output.status.code(), Some(1), "{text}{}", stderr(&output));
+    assert!(text.contains("96 failing: FAILED") && text.contains("worst z inf"), "{text}");
+    // A background 1 % too bright is a real difference: z = 0.01 / 1.01e-3 ≈ 9.9 on every
+    // background entry, while the object still passes.
+    let (brighter, brighter_variance) = background_and_object(-1.0, 1.01);
+    let output = compare(&brighter, &brighter_variance, "brighter", &[]);
+    let text = stdout(&output);
+    assert_eq!(output.status.code(), Some(1), "{text}{}", stderr(&output));
+    assert!(text.contains("96 failing: FAILED") && text.contains("worst z 9.90"), "{text}");
+    // A negative floor is refused.
+    let output = compare(&rounded, &rounded_variance, "rounded", &["--relative-floor=-1"]);
+    assert!(!output.status.success() && stderr(&output).contains("--relative-floor"), "{}", stderr(&output));
 }
 
 #[test]

@@ -17,15 +17,13 @@ fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
 }
 
-/// A directory of the shared Mitsuba scenes, or `None` (with a message) when absent.
-fn shared(dir: &str) -> Option<PathBuf> {
+/// A directory of the shared Mitsuba scenes (`../shared` beside the clone). The tests that
+/// need it are named `shared_*` and ignored, and `.ci/run` runs them in a step of their own;
+/// without the directory they fail here instead of passing unchecked.
+fn shared(dir: &str) -> PathBuf {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/mitsuba").join(dir);
-    if path.is_dir() {
-        Some(path)
-    } else {
-        eprintln!("skipped: {} is absent", path.display());
-        None
-    }
+    assert!(path.is_dir(), "{} is absent: this test needs ../shared beside the clone", path.display());
+    path
 }
 
 fn area(mesh: &MeshData) -> f64 {
@@ -88,8 +86,9 @@ fn assert_error(result: Result<MeshData, String>, prefix: &str, needle: &str) {
 // OBJ
 
 #[test]
-fn obj_caustic_cbox_walls_are_unit_box_faces_pointing_inward() {
-    let Some(dir) = shared("caustic-cbox/meshes") else { return };
+#[ignore = "needs ../shared: the Mitsuba caustic-cbox meshes"]
+fn shared_obj_caustic_cbox_walls_are_unit_box_faces_pointing_inward() {
+    let dir = shared("caustic-cbox/meshes");
     for (name, expected_area) in [
         ("cbox_back.obj", 4.0),
         ("cbox_ceiling.obj", 4.0),
@@ -112,8 +111,9 @@ fn obj_caustic_cbox_walls_are_unit_box_faces_pointing_inward() {
 }
 
 #[test]
-fn obj_cbox_classic_boxes_match_their_file_normals_and_areas() {
-    let Some(dir) = shared("cbox-classic/meshes") else { return };
+#[ignore = "needs ../shared: the Mitsuba cbox-classic meshes"]
+fn shared_obj_cbox_classic_boxes_match_their_file_normals_and_areas() {
+    let dir = shared("cbox-classic/meshes");
     // Corners of the boxes' top faces (x, z) and their heights, from the files.
     type BoxSpec = (&'static str, [(f64, f64); 4], f64);
     let boxes: [BoxSpec; 2] = [
@@ -232,8 +232,9 @@ fn obj_errors_name_line_and_column() {
 }
 
 #[test]
-fn obj_truncated_files_are_errors() {
-    let Some(dir) = shared("cbox-classic/meshes") else { return };
+#[ignore = "needs ../shared: the Mitsuba cbox-classic meshes"]
+fn shared_obj_truncated_files_are_errors() {
+    let dir = shared("cbox-classic/meshes");
     let path = dir.join("cbox_largebox.obj");
     let text = std::fs::read_to_string(&path).unwrap();
     // Cut inside the face `f 5//2 6//2 7//2`: the last corner reads `6/`.
@@ -506,8 +507,9 @@ const MATPREVIEW: [MeshFacts; 3] = [
 ];
 
 #[test]
-fn serialized_matpreview_meshes_match_an_independent_decoder() {
-    let Some(dir) = shared("matpreview") else { return };
+#[ignore = "needs ../shared: the Mitsuba matpreview.serialized"]
+fn shared_serialized_matpreview_meshes_match_an_independent_decoder() {
+    let dir = shared("matpreview");
     let path = dir.join("matpreview.serialized");
     for (index, &(vertices, triangles, min, max, expected_area)) in MATPREVIEW.iter().enumerate() {
         let start = Instant::now();
@@ -540,8 +542,9 @@ fn serialized_matpreview_meshes_match_an_independent_decoder() {
 }
 
 #[test]
-fn serialized_damaged_copies_of_matpreview_are_errors() {
-    let Some(dir) = shared("matpreview") else { return };
+#[ignore = "needs ../shared: the Mitsuba matpreview.serialized"]
+fn shared_serialized_damaged_copies_of_matpreview_are_errors() {
+    let dir = shared("matpreview");
     let bytes = std::fs::read(dir.join("matpreview.serialized")).unwrap();
     let parse = |b: &[u8], i: u32| parse_serialized(b, i, Path::new("m.serialized")).map_err(|e| e.to_string());
     // Mesh offsets from the file's dictionary (version 3: u32 offsets, then the count 3).

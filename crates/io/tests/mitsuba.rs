@@ -1,5 +1,6 @@
 //! Tests of the Mitsuba 3 XML loader: small inline scenes written to a temporary directory,
-//! error messages, and the real scenes in /work/shared/scenes/mitsuba.
+//! error messages, and the real scenes in `../shared/scenes/mitsuba` (tests `shared_*`, ignored:
+//! `.ci/run` runs them where `../shared` is present).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -842,23 +843,19 @@ fn garbage_input_never_panics() {
 // The real scenes
 // ---------------------------------------------------------------------------------------------
 
-const SCENES: &str = "/work/shared/scenes/mitsuba";
-
-fn real_scene(relative: &str) -> Option<SceneDescription> {
-    let path = Path::new(SCENES).join(relative);
-    if !path.exists() {
-        eprintln!("skipping: {} is absent", path.display());
-        return None;
-    }
-    match load(&path, &[]) {
-        Ok(s) => Some(s),
-        Err(e) => panic!("{e}"),
-    }
+/// Loads a scene of the shared Mitsuba scenes (`../shared` beside the clone). The tests that
+/// need them are named `shared_*` and ignored, and `.ci/run` runs them in a step of their own;
+/// without the file they fail here instead of passing unchecked.
+fn real_scene(relative: &str) -> SceneDescription {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/mitsuba").join(relative);
+    assert!(path.exists(), "{} is absent: this test needs ../shared beside the clone", path.display());
+    load(&path, &[]).unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]
-fn cornell_box_xml() {
-    let Some(s) = real_scene("cornell-box/cornell_box.xml") else { return };
+#[ignore = "needs ../shared: the Mitsuba scenes"]
+fn shared_cornell_box_xml() {
+    let s = real_scene("cornell-box/cornell_box.xml");
     assert_eq!(s.shapes.len(), 8);
     assert_eq!(s.max_path_length, Some(8));
     assert_eq!((s.film.width, s.film.height), (512, 512));
@@ -900,8 +897,8 @@ fn cornell_box_xml() {
 }
 
 /// Loads a scene that needs the OBJ / serialized mesh readers and checks its shape count.
-fn mesh_scene(relative: &str, shapes: usize) -> Option<SceneDescription> {
-    let s = real_scene(relative)?;
+fn mesh_scene(relative: &str, shapes: usize) -> SceneDescription {
+    let s = real_scene(relative);
     assert_eq!(s.shapes.len(), shapes, "{relative}");
     for shape in &s.shapes {
         if let Geometry::Mesh(m) = &shape.geometry {
@@ -909,12 +906,13 @@ fn mesh_scene(relative: &str, shapes: usize) -> Option<SceneDescription> {
             m.validate().unwrap();
         }
     }
-    Some(s)
+    s
 }
 
 #[test]
-fn caustic_cbox_xml() {
-    let Some(s) = mesh_scene("caustic-cbox/cbox.xml", 8) else { return };
+#[ignore = "needs ../shared: the Mitsuba scenes"]
+fn shared_caustic_cbox_xml() {
+    let s = mesh_scene("caustic-cbox/cbox.xml", 8);
     assert_eq!(s.max_path_length, Some(6));
     assert_eq!(s.film.filter, FilterDesc::Tent { radius: 1.0 });
     let glass = s.shapes.iter().find(|sh| sh.name == "glasssphere").unwrap();
@@ -928,26 +926,29 @@ fn caustic_cbox_xml() {
 }
 
 #[test]
-fn cbox_classic_xml() {
+#[ignore = "needs ../shared: the Mitsuba scenes"]
+fn shared_cbox_classic_xml() {
     for file in ["cbox-classic/cbox.xml", "cbox-classic/cbox-rgb.xml", "cbox-classic/cbox-spectral.xml"] {
-        let Some(s) = mesh_scene(file, 8) else { return };
+        let s = mesh_scene(file, 8);
         assert_eq!(s.shapes.iter().filter(|sh| sh.emission.is_some()).count(), 1, "{file}");
         assert_vec(s.camera.position, Vec3::new(278.0, 273.0, -800.0), 1e-3);
     }
 }
 
 #[test]
-fn veach_mis_xml() {
-    let Some(s) = mesh_scene("veach-mis/veach_mis_path.xml", 10) else { return };
+#[ignore = "needs ../shared: the Mitsuba scenes"]
+fn shared_veach_mis_xml() {
+    let s = mesh_scene("veach-mis/veach_mis_path.xml", 10);
     assert_eq!(s.max_path_length, Some(8));
     assert_eq!(s.shapes.iter().filter(|sh| sh.emission.is_some()).count(), 4 + 1);
-    let Some(s) = mesh_scene("veach-mis/integrator_direct_both.xml", 10) else { return };
+    let s = mesh_scene("veach-mis/integrator_direct_both.xml", 10);
     assert_eq!(s.max_path_length, Some(2));
 }
 
 #[test]
-fn matpreview_xml() {
-    let Some(s) = mesh_scene("matpreview/matpreview.xml", 3) else { return };
+#[ignore = "needs ../shared: the Mitsuba scenes"]
+fn shared_matpreview_xml() {
+    let s = mesh_scene("matpreview/matpreview.xml", 3);
     assert_eq!((s.film.width, s.film.height), (683, 512));
     assert!(matches!(s.lights[0], LightDesc::EnvMap { scale: 3.0, .. }));
 }

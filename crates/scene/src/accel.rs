@@ -822,6 +822,61 @@ mod tests {
         assert!(check(&tris, &bvh, &rays) > 50);
     }
 
+    /// Every word of a tree: the root, the child pairs, the primitive ids.
+    fn tree_words(bvh: &Bvh) -> Vec<u32> {
+        let nodes = std::iter::once(&bvh.root).chain(bvh.pairs.iter().flat_map(|p| p.0.iter()));
+        nodes.flat_map(|n| n.v).chain(bvh.prims.iter().copied()).collect()
+    }
+
+    /// A closed UV sphere of radius 1 with `rings × segments × 2` triangles (its pole rings are
+    /// degenerate slivers, as in real meshes).
+    fn uv_sphere(rings: usize, segments: usize) -> Vec<[Vec3; 3]> {
+        let point = |i: usize, j: usize| {
+            let (theta, phi) =
+                (std::f32::consts::PI * i as f32 / rings as f32, std::f32::consts::TAU * j as f32 / segments as f32);
+            Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+        };
+        let mut tris = Vec::with_capacity(2 * rings * segments);
+        for i in 0..rings {
+            for j in 0..segments {
+                let (a, b, c, d) = (point(i, j), point(i, j + 1), point(i + 1, j), point(i + 1, j + 1));
+                tris.push([a, c, d]);
+                tris.push([a, d, b]);
+            }
+        }
+        tris
+    }
+
+    #[test]
+    fn accel_parallel_build_is_identical_with_one_and_two_threads() {
+        // 81,920 triangles: above both the parallel subtree threshold and the parallel binning
+        // threshold, so the two-thread build splits work at both levels.
+        let tris = uv_sphere(160, 256);
+        assert!(tris.len() >= PARALLEL_BINNING_THRESHOLD && tris.len() >= PARALLEL_THRESHOLD);
+        let bounds = triangle_bounds(&tris);
+        let build = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| Bvh::build(&bounds))
+        };
+        let (one, two) = (build(1), build(2));
+        assert_eq!(one.stats(), two.stats());
+        assert_eq!(one.stats().primitives, tris.len());
+        let (a, b) = (tree_words(&one), tree_words(&two));
+        assert_eq!(a.len(), b.len());
+        let first_difference = a.iter().zip(&b).position(|(x, y)| x != y);
+        assert_eq!(first_difference, None, "the trees differ at word {first_difference:?}");
+        // And the tree is right: rays from outside at the sphere find the brute-force hits.
+        let mut rng = Rng::for_stream(4, 0, 0);
+        let rays: Vec<(Ray, f32)> = (0..300)
+            .map(|_| {
+                let origin = random_direction(&mut rng) * 3.0;
+                let target = random_vec(&mut rng, 1.0);
+                (Ray::new(origin, (target - origin).normalize()), f32::INFINITY)
+            })
+            .collect();
+        assert!(check(&tris, &two, &rays) > 150);
+    }
+
     #[test]
     fn accel_empty_tree_misses() {
         let bvh = Bvh::build(&[]);

@@ -11,7 +11,7 @@ use scene::light::AreaLight;
 use scene::shape::{Shape, Triangle};
 use scene::{Bsdf, Camera, Light, Material, Primitive, ReferenceMaterial, Scene, TransportMode};
 use spectrum::Rgb;
-use testkit::MeanVar;
+use testkit::{MeanVar, z_test_entries};
 
 /// Block means over iterations, per block and channel (`(block * 3 + channel)`), with their
 /// standard errors estimated from the spread of the iterations.
@@ -22,6 +22,59 @@ pub struct BlockEstimate {
     pub means: Vec<f64>,
     /// Standard error per block and channel.
     pub std_errors: Vec<f64>,
+    /// Every iteration's block means, iteration-major (`iteration * entries + block * 3 +
+    /// channel`), for statistics over several blocks ([`BlockEstimate::pooled`]).
+    pub iterations: Vec<f64>,
+}
+
+impl BlockEstimate {
+    /// Per channel, the mean over the blocks that `keep` selects (equal weights) with its
+    /// standard error from the spread of the iterations: the blocks of one iteration are not
+    /// independent (they share light paths and wavelengths), the iterations are.
+    pub fn pooled(&self, keep: &[bool]) -> ([f64; 3], [f64; 3]) {
+        let entries = self.means.len();
+        assert_eq!(keep.len() * 3, entries, "one flag per block");
+        let kept = keep.iter().filter(|k| **k).count().max(1) as f64;
+        let mut stats = [MeanVar::new(); 3];
+        for frame in self.iterations.chunks_exact(entries) {
+            let mut sums = [0.0f64; 3];
+            for (b, _) in keep.iter().enumerate().filter(|(_, k)| **k) {
+                for (c, sum) in sums.iter_mut().enumerate() {
+                    *sum += frame[b * 3 + c];
+                }
+            }
+            for (s, sum) in stats.iter_mut().zip(sums) {
+                s.push(sum / kept);
+            }
+        }
+        (stats.map(|s| s.mean()), stats.map(|s| s.std_error()))
+    }
+}
+
+/// The smallest relative bias of either sign that the Z-test `z_test_entries(a, b, alpha)`
+/// detects in `a`: the smallest `β` for which both `a·(1 + β)` and `a·(1 − β)` (means and
+/// standard errors scaled, as a biased estimator's would be) fail the same test (bisection to
+/// 1e-4; `∞` when even `β = 1` passes). Each entry's `z` is monotonic in the scale (for
+/// positive means), so the set of failing scales is an interval beyond the threshold.
+pub fn detectable_bias(a_mean: &[f64], a_se: &[f64], b_mean: &[f64], b_se: &[f64], alpha: f64) -> f64 {
+    let fails = |scale: f64| {
+        let m: Vec<f64> = a_mean.iter().map(|v| v * scale).collect();
+        let e: Vec<f64> = a_se.iter().map(|v| v * scale).collect();
+        !z_test_entries(&m, &e, b_mean, b_se, alpha).passed
+    };
+    let mut worst = 0.0f64;
+    for sign in [1.0, -1.0] {
+        if !fails(1.0 + sign) {
+            return f64::INFINITY;
+        }
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        while hi - lo > 1e-4 {
+            let mid = 0.5 * (lo + hi);
+            if fails(1.0 + sign * mid) { hi = mid } else { lo = mid }
+        }
+        worst = worst.max(hi);
+    }
+    worst
 }
 
 /// Renders `iterations` iterations of `algorithm` and returns block statistics.
@@ -30,6 +83,7 @@ pub fn block_estimate(scene: &Scene, settings: &RenderSettings, iterations: u64,
     let (w, h) = (scene.camera.width, scene.camera.height);
     let (bx, by) = ((w / block) as usize, (h / block) as usize);
     let mut stats = vec![MeanVar::new(); bx * by * 3];
+    let mut all = Vec::with_capacity(iterations as usize * bx * by * 3);
     for _ in 0..iterations {
         assert_eq!(renderer.step(), 0, "no rejected samples");
         let frame = renderer.frame();
@@ -46,12 +100,14 @@ pub fn block_estimate(scene: &Scene, settings: &RenderSettings, iterations: u64,
         let n = (block * block) as f64;
         for (s, sum) in stats.iter_mut().zip(sums) {
             s.push(sum / n);
+            all.push(sum / n);
         }
     }
     BlockEstimate {
         blocks_x: bx,
         means: stats.iter().map(MeanVar::mean).collect(),
         std_errors: stats.iter().map(MeanVar::std_error).collect(),
+        iterations: all,
     }
 }
 
