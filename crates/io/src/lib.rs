@@ -25,11 +25,13 @@ pub mod mesh;
 pub mod mitsuba;
 pub mod pbrt;
 mod scene_error;
+mod trace;
 
 pub use crate::error::ImageError;
 pub use crate::linear_image::{Image, MAX_PIXELS, downsample_box};
 pub use crate::scene_error::SceneError;
 pub use crate::srgb::{linear_to_srgb8, srgb_eotf, srgb_oetf, srgb8_to_linear};
+pub use crate::trace::load_scene_traced;
 
 /// An image file format supported by [`write_image`] and [`read_image`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -128,6 +130,7 @@ pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result
 /// Errors (never panics) on unsupported extensions, unreadable files,
 /// malformed or truncated contents, and images larger than [`MAX_PIXELS`].
 pub fn read_image(path: &Path) -> Result<Image, ImageError> {
+    trace::opened(path);
     match ImageFormat::from_path(path)? {
         ImageFormat::Exr => exr_file::read(path),
         ImageFormat::Pfm => pfm::read(path),

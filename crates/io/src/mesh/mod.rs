@@ -102,6 +102,7 @@ pub fn parse_serialized(bytes: &[u8], shape_index: u32, path: &Path) -> Result<M
 
 /// Reads a whole file, naming it in the error.
 fn read_file(path: &Path) -> Result<Vec<u8>, SceneError> {
+    crate::trace::opened(path);
     std::fs::read(path).map_err(|e| SceneError::in_file(path, format!("cannot read the file: {e}")))
 }
 

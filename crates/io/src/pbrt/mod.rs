@@ -190,6 +190,7 @@ impl Builder {
 
     /// Parses and runs one file; `from` is the including directive for messages.
     fn run_file(&mut self, path: &Path, from: Option<(&Path, Pos)>, depth: usize) -> Result<(), SceneError> {
+        crate::trace::opened(path);
         let text = std::fs::read(path).map_err(|e| match from {
             Some((file, pos)) => err(file, pos, format!("cannot read '{}': {e}", path.display())),
             None => SceneError::in_file(path, format!("cannot read the file: {e}")),
