@@ -40,6 +40,9 @@ pub struct BenchArgs {
     /// Memory-efficient progressive VCM (tech report §6.2) for the VCM engine's algorithms.
     #[arg(long)]
     memory_efficient: bool,
+    /// Spectral rendering (four hero-rotated wavelengths per path).
+    #[arg(long)]
+    spectral: bool,
     /// Time the acceleration structure instead: BVH build and Mrays/s (closest hit and shadow
     /// rays, one thread and all) on each scene's geometry.
     #[arg(long)]
@@ -103,6 +106,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
             if args.memory_efficient {
                 command.arg("--memory-efficient");
             }
+            if args.spectral {
+                command.arg("--spectral");
+            }
             let output = command.output().with_context(|| format!("cannot run '{}'", exe.display()))?;
             eprint!("{}", String::from_utf8_lossy(&output.stderr));
             if !output.status.success() {
@@ -124,6 +130,7 @@ fn child(args: &BenchArgs, source: &session::SceneSource, name: AlgorithmName) -
         threads: args.threads,
         max_length: file_max_length.unwrap_or(RenderSettings::default().max_length),
         memory_efficient: args.memory_efficient,
+        spectral: args.spectral,
         ..RenderSettings::default()
     };
     render::render(&scene, &settings(Budget::Iterations(1))).map_err(anyhow::Error::msg)?;
