@@ -30,7 +30,9 @@ use render::driver::Renderer;
 use scene::Film;
 use scene::cornell;
 
-use crate::{AlgorithmName, LoadedScene, SceneSource};
+use session::{LoadedScene, SceneSource};
+
+use crate::AlgorithmName;
 
 /// Arguments of `vcm report`.
 #[derive(clap::Args, Debug, Clone)]
@@ -163,7 +165,7 @@ struct SceneEntry {
 /// Resolves a `--scenes` entry: where it comes from and its label. The one place that knows
 /// how scene names are resolved.
 fn resolve_scene(name: &str) -> Result<(SceneSource, String)> {
-    let source = crate::scene_source(name, &[])?;
+    let source = session::scene_source(name, &[])?;
     let label = match &source {
         SceneSource::Builtin(mask) => cornell::builtin_scenes()
             .find(|s| s.mask == *mask)
@@ -265,8 +267,8 @@ pub fn run(args: ReportArgs) -> Result<()> {
         std::fs::create_dir_all(&dir)
             .with_context(|| format!("cannot create the output directory '{}'", dir.display()))?;
     }
-    crate::check_writable(&out.join("index.html"))?;
-    crate::check_writable(&out.join("report.json"))?;
+    session::outputs::check_writable(&out.join("index.html"))?;
+    session::outputs::check_writable(&out.join("report.json"))?;
 
     let options = io::WriteOptions { exposure_stops: args.exposure };
     crate::install_interrupt_handler();

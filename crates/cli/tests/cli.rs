@@ -264,9 +264,11 @@ fn memory_guard_switches_or_stops() {
     assert_eq!(output.status.code(), Some(2));
     let message = stderr(&output);
     assert!(message.contains("more than --max-memory 1 KiB") && message.contains("memory-efficient"), "{message}");
-    // BPT stores nothing in the memory-efficient mode: it switches and renders.
+    // BPT stores nothing in the memory-efficient mode: at 512x512 the default mode needs about
+    // 75 MiB at the peak, the memory-efficient one about 40 MiB (`vcm bench -s 1 -a bpt -r
+    // 512x512 [--memory-efficient]`): it switches and renders.
     let output =
-        vcm(&["render", "--scene", "1", "-a", "bpt", "-i", "1", "-r", "32x32", "--max-memory", "1K", "-o", out]);
+        vcm(&["render", "--scene", "1", "-a", "bpt", "-i", "1", "-r", "512x512", "--max-memory", "57M", "-o", out]);
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(stderr(&output).contains("switching to --memory-efficient"), "{}", stderr(&output));
     // A generous limit changes nothing.
@@ -277,4 +279,149 @@ fn memory_guard_switches_or_stops() {
     let output = vcm(&["render", "--max-memory", "lots", "-o", out]);
     assert_eq!(output.status.code(), Some(2));
     assert!(stderr(&output).contains("invalid memory size 'lots'"), "{}", stderr(&output));
+}
+
+/// A scene file that reads two more files: an included material and an OBJ mesh.
+fn write_scene_with_parts(dir: &std::path::Path) -> [PathBuf; 3] {
+    let main = dir.join("main.xml");
+    let materials = dir.join("materials.xml");
+    let mesh = dir.join("quad.obj");
+    std::fs::write(
+        &main,
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="12"/></film>
+    </sensor>
+    <include filename="materials.xml"/>
+    <shape type="obj"><string name="filename" value="quad.obj"/><ref id="grey"/></shape>
+    <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+</scene>
+"#,
+    )
+    .unwrap();
+    std::fs::write(
+        &materials,
+        r#"<scene version="3.0.0"><bsdf type="diffuse" id="grey"><rgb name="reflectance" value="0.5"/></bsdf></scene>"#,
+    )
+    .unwrap();
+    std::fs::write(&mesh, "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n").unwrap();
+    [main, materials, mesh]
+}
+
+#[test]
+fn resume_refuses_a_changed_scene_and_names_the_file() {
+    let dir = temp_dir("resume-changed");
+    let [main, materials, mesh] = write_scene_with_parts(&dir);
+    let checkpoint = dir.join("c.ckpt");
+    let out = dir.join("a.pfm");
+    let (checkpoint_arg, out_arg) = (checkpoint.to_str().unwrap(), out.to_str().unwrap());
+    let output = vcm(&[
+        "render",
+        "--scene",
+        main.to_str().unwrap(),
+        "-a",
+        "pt",
+        "-i",
+        "2",
+        "--quiet",
+        "--checkpoint",
+        checkpoint_arg,
+        "-o",
+        out_arg,
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let header = String::from_utf8_lossy(&std::fs::read(&checkpoint).unwrap()).into_owned();
+    for file in [&main, &materials, &mesh] {
+        assert!(header.contains(&format!(" {}\n", file.display())), "{file:?} not recorded in\n{header}");
+    }
+    // Unchanged: resumes.
+    let resume =
+        |iterations: &str| vcm(&["render", "--resume", checkpoint_arg, "-i", iterations, "--quiet", "-o", out_arg]);
+    let output = resume("3");
+    assert!(output.status.success(), "{}", stderr(&output));
+    // Each file edited in turn (a comment: the bytes change) is named; restored, it resumes.
+    for (file, expected) in [
+        (&main, format!("scene file '{}' changed since the checkpoint", main.display())),
+        (&materials, format!("'{}', which the scene reads, changed since the checkpoint", materials.display())),
+        (&mesh, format!("'{}', which the scene reads, changed since the checkpoint", mesh.display())),
+    ] {
+        let original = std::fs::read(file).unwrap();
+        let mut edited = original.clone();
+        edited.extend_from_slice(if file == &mesh { b"# edited\n" } else { b"<!-- edited -->\n" });
+        std::fs::write(file, &edited).unwrap();
+        assert_fails(
+            &["render", "--resume", checkpoint_arg, "-i", "4", "--quiet", "-o", out_arg],
+            &[&format!("cannot resume '{checkpoint_arg}'"), &expected],
+        );
+        std::fs::write(file, &original).unwrap();
+    }
+    let output = resume("4");
+    assert!(output.status.success(), "{}", stderr(&output));
+    // A checkpoint of the previous format (no scene record) is refused with the reason.
+    let old = dir.join("old.ckpt");
+    std::fs::write(&old, header.replacen("vcm-checkpoint 3", "vcm-checkpoint 2", 1)).unwrap();
+    assert_fails(
+        &["render", "--resume", old.to_str().unwrap(), "-o", out_arg],
+        &["has format 2", "does not record the scene", "reads format 3"],
+    );
+    // One written by another version of vcm.
+    let other = dir.join("other.ckpt");
+    let version = header.lines().find_map(|l| l.strip_prefix("vcm_version=")).unwrap().to_string();
+    std::fs::write(&other, header.replacen(&format!("vcm_version={version}"), "vcm_version=0.0.1", 1)).unwrap();
+    assert_fails(
+        &["render", "--resume", other.to_str().unwrap(), "-o", out_arg],
+        &["written by vcm 0.0.1 (checkpoint format 3)", &format!("this is vcm {version}")],
+    );
+}
+
+/// Parses a number column of `vcm bench`, failing with the row.
+fn number(row: &[&str], index: usize) -> f64 {
+    row[index].parse().unwrap_or_else(|_| panic!("column {index} of {row:?} is not a number"))
+}
+
+#[test]
+fn bench_prints_every_column_with_sane_values() {
+    let output = vcm(&["bench", "-s", "1", "-a", "pt,bpt,vcm", "-i", "1", "-r", "16x16", "--threads", "1"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = String::from_utf8_lossy(&output.stdout).into_owned();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    for column in [
+        "scene",
+        "algorithm",
+        "ms/iteration",
+        "CPU-s/iter",
+        "light vertices",
+        "B/vertex",
+        "threads",
+        "peak RSS KiB",
+        "guard KiB",
+    ] {
+        assert!(header.contains(column), "{header}");
+    }
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split_whitespace().collect()).collect();
+    assert_eq!(rows.len(), 3, "{text}");
+    for (row, algorithm) in rows.iter().zip(["pt", "bpt", "vcm"]) {
+        assert!(row.len() >= 9, "{row:?}");
+        assert_eq!((row[0], row[1]), ("cornell-area-mirror", algorithm));
+        let ms = number(row, 2);
+        assert!(ms > 0.0 && ms < 60e3, "{row:?}");
+        assert!(number(row, 3) >= 0.0, "{row:?}");
+        assert_eq!(row[6], "1", "threads: {row:?}");
+        // A process with the binary mapped and a 16x16 film: more than 1 MiB, far below 1 GiB.
+        let peak = number(row, 7);
+        assert!(peak > 1024.0 && peak < 1024.0 * 1024.0, "peak RSS: {row:?}");
+        if algorithm == "pt" {
+            assert_eq!(&row[4..6], ["-", "-"], "{row:?}");
+        } else {
+            let (vertices, bytes) = (number(row, 4), number(row, 5));
+            assert!(vertices > 0.0 && (16.0..=512.0).contains(&bytes), "{row:?}");
+        }
+        // The guard's estimate (resident memory before the render plus the render's buffers,
+        // docs/memory.md) against the measured peak; at 16x16 both are mostly the process.
+        let guard = number(row, 8);
+        assert!(guard > 0.75 * peak && guard < 1.33 * peak, "guard estimate against peak: {row:?}");
+    }
 }

@@ -34,6 +34,7 @@ pub mod mesh;
 pub mod mitsuba;
 pub mod pbrt;
 mod scene_error;
+mod trace;
 
 pub use crate::error::ImageError;
 pub use crate::linear_image::{Image, MAX_PIXELS, downsample_box};
@@ -41,6 +42,7 @@ pub use crate::options::{LoadOptions, LoadedScene, RenderSettings};
 pub use crate::scene_error::SceneError;
 pub use crate::srgb::{linear_to_srgb8, srgb_eotf, srgb_oetf, srgb8_to_linear};
 pub use crate::texture_file::{StoredValues, TEXTURE_EXTENSIONS, TextureEncoding, TextureFile, read_texture_file};
+pub use crate::trace::load_scene_traced;
 
 /// An image file format supported by [`write_image`] and [`read_image`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -139,6 +141,7 @@ pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result
 /// Errors (never panics) on unsupported extensions, unreadable files,
 /// malformed or truncated contents, and images larger than [`MAX_PIXELS`].
 pub fn read_image(path: &Path) -> Result<Image, ImageError> {
+    trace::opened(path);
     match ImageFormat::from_path(path)? {
         ImageFormat::Exr => exr_file::read(path),
         ImageFormat::Pfm => pfm::read(path),

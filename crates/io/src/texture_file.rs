@@ -91,6 +91,7 @@ pub fn read_texture_file(path: &Path) -> Result<TextureFile, ImageError> {
 
 fn read_with_image_crate(path: &Path) -> Result<TextureFile, ImageError> {
     let fail = |message: String| ImageError::TextureDecode { path: path.to_path_buf(), message };
+    crate::trace::opened(path);
     let file = File::open(path).map_err(|e| ImageError::Read { path: path.to_path_buf(), cause: e })?;
     let mut reader = ImageReader::new(BufReader::new(file))
         .with_guessed_format()

@@ -55,6 +55,24 @@ pub enum RussianRoulette {
     Albedo,
 }
 
+impl RussianRoulette {
+    /// The command line's spelling: `albedo`, or the first bounce of Mitsuba's rule (`5`).
+    pub fn name(self) -> String {
+        match self {
+            RussianRoulette::Throughput { start } => start.to_string(),
+            RussianRoulette::Albedo => "albedo".to_string(),
+        }
+    }
+
+    /// Parses [`RussianRoulette::name`]'s spellings.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "albedo" => Some(RussianRoulette::Albedo),
+            n => n.parse().ok().filter(|s| *s >= 1).map(|start| RussianRoulette::Throughput { start }),
+        }
+    }
+}
+
 impl Default for RussianRoulette {
     /// Mitsuba 3's default, `rr_depth` = 5.
     fn default() -> Self {
@@ -73,6 +91,23 @@ pub enum Heuristic {
 }
 
 impl Heuristic {
+    /// The command line's spelling: `balance` or `power`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Heuristic::Balance => "balance",
+            Heuristic::Power => "power",
+        }
+    }
+
+    /// Parses [`Heuristic::name`]'s spellings.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "balance" => Some(Heuristic::Balance),
+            "power" => Some(Heuristic::Power),
+            _ => None,
+        }
+    }
+
     /// The weight of a sample of density `own` against a technique of density `other`.
     #[inline]
     fn weight(self, own: f32, other: f32) -> f32 {

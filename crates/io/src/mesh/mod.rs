@@ -104,6 +104,7 @@ pub fn parse_serialized(bytes: &[u8], shape_index: u32, path: &Path) -> Result<M
 /// Reads a whole file, naming it in the error.
 /// The file's bytes, gunzipped when it is gzip-compressed (e.g. `.ply.gz`).
 fn read_file(path: &Path) -> Result<Vec<u8>, SceneError> {
+    crate::trace::opened(path);
     crate::gz::read_maybe_gzip(path).map_err(|e| SceneError::in_file(path, e))
 }
 

@@ -507,6 +507,7 @@ fn parse_spectrum(node: &Node, name: &str) -> Result<Value, SceneError> {
     }
     let pairs: Vec<(f64, f64)> = if let Some(filename) = node.attr("filename") {
         let dir = node.pos.file.parent().map(|d| d.join(filename)).unwrap_or_else(|| filename.into());
+        crate::trace::opened(&dir);
         let text = std::fs::read_to_string(&dir)
             .map_err(|e| node.pos.error(format!("spectrum '{name}': cannot read '{}': {e}", dir.display())))?;
         let mut pairs = Vec::new();

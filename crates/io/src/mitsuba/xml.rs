@@ -95,6 +95,7 @@ impl Reader<'_> {
     /// Reads one file and returns its root's children. `included_from` is the `<include>`
     /// element's position for included files.
     fn read_file(&mut self, path: &Path, included_from: Option<&Pos>) -> Result<Vec<Node>, SceneError> {
+        crate::trace::opened(path);
         let text = std::fs::read_to_string(path).map_err(|e| match included_from {
             Some(pos) => pos.error(format!("cannot read included file '{}': {e}", path.display())),
             None => SceneError::in_file(path, format!("cannot read scene file: {e}")),

@@ -211,6 +211,7 @@ impl Builder {
 
     /// Parses and runs one file; `from` is the including directive for messages.
     fn run_file(&mut self, path: &Path, from: Option<(&Path, Pos)>, depth: usize) -> Result<(), SceneError> {
+        crate::trace::opened(path);
         let text = crate::gz::read_maybe_gzip(path).map_err(|e| match from {
             Some((file, pos)) => err(file, pos, format!("'{}': {e}", path.display())),
             None => SceneError::in_file(path, e),

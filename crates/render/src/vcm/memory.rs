@@ -151,6 +151,14 @@ fn peak_bytes(counts: &Counts, settings: &VcmSettings, memory_efficient: bool) -
     } else {
         0.0
     };
+    // One batch of the light pass in per-chunk vectors (capacity up to twice their length)
+    // before it moves into the store.
+    // (The memory-efficient mode without merging keeps no vertex beyond one light sub-path.)
+    let batch = if stored && (techniques.merge || !memory_efficient) {
+        2.0 * counts.vertices / counts.pixels.max(1.0) * (super::LIGHT_BATCH as f64).min(counts.pixels) * vertex as f64
+    } else {
+        0.0
+    };
     let vertices = if !stored {
         0.0
     } else if memory_efficient {
@@ -160,7 +168,15 @@ fn peak_bytes(counts: &Counts, settings: &VcmSettings, memory_efficient: bool) -
     } else {
         counts.vertices * vertex as f64
     };
-    (counts.pixels * per_pixel + splats + vertices + grid).ceil() as u64
+    (counts.pixels * per_pixel + splats + vertices + grid + batch).ceil() as u64
+}
+
+/// Resident memory of this process in bytes (Linux: `VmRSS` of `/proc/self/status`), if known.
+pub fn resident_bytes() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = text.lines().find(|l| l.starts_with("VmRSS:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }
 
 /// Physical memory of the machine in bytes (Linux: `MemTotal` of `/proc/meminfo`), if known.

@@ -721,8 +721,8 @@ fn index_for_merging<S: SpectralMode>(store: &mut LightVertexStore<S>, grid: &mu
 
 /// Light sub-paths traced per batch of the light pass: the vertices of one batch are moved into
 /// the store before the next batch is traced, so the pass never holds a second copy of the
-/// iteration's vertices.
-const LIGHT_BATCH: usize = 32 * LIGHT_CHUNK;
+/// iteration's vertices (16 chunks: enough parallel work for 16 threads).
+pub(crate) const LIGHT_BATCH: usize = 16 * LIGHT_CHUNK;
 
 /// Traces the `pixel_count` light sub-paths of `iteration` in parallel chunks and appends their
 /// vertices and path ends to `store`, in path order (deterministic for any thread count).

@@ -3,16 +3,26 @@
 //! rejected-sample counts. The random streams are keyed by (seed, iteration, path), and the
 //! radius schedule by the iteration index, so a resumed render equals an uninterrupted one.
 //!
-//! Format (version 2): the line `vcm-checkpoint 2`, then `key=value` lines, an empty line, the
-//! sums and then the sums of squares, as little-endian f64 triples, row-major. Files are written to `FILE.tmp` and
-//! renamed over `FILE`, so a crash never leaves a truncated checkpoint.
+//! Format (version 3): the line `vcm-checkpoint 3`, then `key=value` lines, an empty line, the
+//! sums and then the sums of squares, as little-endian f64 triples, row-major. Files are
+//! written to `FILE.tmp` and renamed over `FILE`, so a crash never leaves a truncated
+//! checkpoint.
+//!
+//! Version 3 added what the checkpoint rendered: `vcm_version` (the crate version of the
+//! binary that wrote it; a different version may render differently, so it must match),
+//! `scene_hash` and one `scene_read=HASH PATH` line per file the scene loader read
+//! ([`Fingerprint`]). Version 2 files (no scene record) are refused with a message: resume
+//! them with the binary that wrote them.
 
+use render::path_tracer::{Heuristic, RussianRoulette};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use scene::Film;
+
+use crate::fingerprint::Fingerprint;
 
 /// The settings a checkpoint records (as the command line spells them).
 #[derive(Clone, Debug, PartialEq)]
@@ -39,9 +49,19 @@ pub struct Recorded {
     pub memory_efficient: bool,
     /// Spectral mode (absent in checkpoints written before it existed: RGB).
     pub spectral: bool,
+    /// Russian roulette of the path tracer.
+    pub russian_roulette: RussianRoulette,
+    /// MIS heuristic of the path tracer.
+    pub heuristic: Heuristic,
+    /// What the scene was built from.
+    pub fingerprint: Fingerprint,
 }
 
-const MAGIC: &str = "vcm-checkpoint 2";
+/// The checkpoint format this binary reads and writes.
+pub const FORMAT: u32 = 3;
+const MAGIC: &str = "vcm-checkpoint 3";
+/// The renderer version recorded in (and required of) checkpoints.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// Writes `film` and `recorded` to `path` atomically (write, then rename).
 pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
@@ -50,6 +70,11 @@ pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
         let mut out = std::io::BufWriter::new(std::fs::File::create(&temporary)?);
         writeln!(out, "{MAGIC}")?;
         let r = recorded;
+        writeln!(out, "vcm_version={VERSION}")?;
+        writeln!(out, "scene_hash={:016x}", r.fingerprint.hash)?;
+        for (file, hash) in &r.fingerprint.files {
+            writeln!(out, "scene_read={hash:016x} {}", file.display())?;
+        }
         writeln!(out, "mask={}", r.mask)?;
         if let Some((file, defines)) = &r.scene_file {
             writeln!(out, "scene_file={}", file.display())?;
@@ -66,6 +91,8 @@ pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
         writeln!(out, "radius_mode={}", r.radius_mode)?;
         writeln!(out, "memory_efficient={}", r.memory_efficient)?;
         writeln!(out, "spectral={}", r.spectral)?;
+        writeln!(out, "russian_roulette={}", r.russian_roulette.name())?;
+        writeln!(out, "heuristic={}", r.heuristic.name())?;
         writeln!(out, "iterations={}", film.iterations())?;
         writeln!(out, "rejected={}", film.rejected_samples())?;
         writeln!(out)?;
@@ -88,16 +115,30 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
     let split = bytes.windows(2).position(|w| w == b"\n\n").ok_or_else(|| bad("no end of header".into()))?;
     let header = std::str::from_utf8(&bytes[..split]).map_err(|_| bad("the header is not text".into()))?;
     let mut lines = header.lines();
-    if lines.next() != Some(MAGIC) {
-        bail!(bad(format!("the first line is not '{MAGIC}'")));
+    match lines.next() {
+        Some(MAGIC) => {}
+        Some(old @ ("vcm-checkpoint 1" | "vcm-checkpoint 2")) => bail!(
+            "checkpoint '{}' has format {} ('{old}'), which does not record the scene it rendered; this is vcm \
+             {VERSION}, which reads format {FORMAT}: resume it with the vcm that wrote it, or start a new render",
+            path.display(),
+            &old[15..]
+        ),
+        _ => bail!(bad(format!("the first line is not '{MAGIC}'"))),
     }
     let mut fields = BTreeMap::new();
     let mut defines = Vec::new();
+    let mut files = Vec::new();
     for (number, line) in lines.enumerate() {
         let (key, value) =
             line.split_once('=').ok_or_else(|| bad(format!("line {}: expected key=value", number + 2)))?;
         if key == "define" {
             defines.push(value.to_string());
+        } else if key == "scene_read" {
+            let (hash, file) = value
+                .split_once(' ')
+                .and_then(|(h, f)| Some((u64::from_str_radix(h, 16).ok()?, PathBuf::from(f))))
+                .ok_or_else(|| bad(format!("line {}: expected scene_read=HASH PATH", number + 2)))?;
+            files.push((file, hash));
         } else {
             fields.insert(key, value);
         }
@@ -106,6 +147,16 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
         fields.get(key)?.parse().ok()
     }
     let missing = |key: &str| bad(format!("missing or invalid '{key}'"));
+    let written_by: String = field(&fields, "vcm_version").ok_or_else(|| missing("vcm_version"))?;
+    if written_by != VERSION {
+        bail!(
+            "checkpoint '{}' was written by vcm {written_by} (checkpoint format {FORMAT}); this is vcm {VERSION} \
+             (format {FORMAT}), which may render differently: resume it with vcm {written_by}, or start a new render",
+            path.display()
+        );
+    }
+    let scene_hash =
+        fields.get("scene_hash").and_then(|h| u64::from_str_radix(h, 16).ok()).ok_or_else(|| missing("scene_hash"))?;
     let resolution = fields
         .get("resolution")
         .and_then(|r| r.split_once('x'))
@@ -126,6 +177,15 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
             None => false,
             Some(_) => field(&fields, "spectral").ok_or_else(|| missing("spectral"))?,
         },
+        russian_roulette: match fields.get("russian_roulette") {
+            None => RussianRoulette::default(),
+            Some(name) => RussianRoulette::from_name(name).ok_or_else(|| missing("russian_roulette"))?,
+        },
+        heuristic: match fields.get("heuristic") {
+            None => Heuristic::default(),
+            Some(name) => Heuristic::from_name(name).ok_or_else(|| missing("heuristic"))?,
+        },
+        fingerprint: Fingerprint { hash: scene_hash, files },
     };
     let iterations: u64 = field(&fields, "iterations").ok_or_else(|| missing("iterations"))?;
     let rejected: u64 = field(&fields, "rejected").ok_or_else(|| missing("rejected"))?;
@@ -167,6 +227,9 @@ mod tests {
             radius_mode: "per-pixel".into(),
             memory_efficient: true,
             spectral: true,
+            russian_roulette: RussianRoulette::Albedo,
+            heuristic: Heuristic::Power,
+            fingerprint: Fingerprint::builtin(450, (3, 2)),
         };
         let sums: Vec<[f64; 3]> = (0..6).map(|i| [i as f64 * 0.1, 1.0 / 3.0, f64::MIN_POSITIVE]).collect();
         let squares: Vec<[f64; 3]> = (0..6).map(|i| [i as f64, 0.5, 1e300]).collect();
@@ -177,6 +240,10 @@ mod tests {
         assert_eq!(film_back.sums(), &sums[..]);
         // A scene file with its parameters.
         recorded.scene_file = Some((PathBuf::from("scenes/a b.xml"), vec!["spp=4".into(), "res=x=y".into()]));
+        recorded.fingerprint = Fingerprint::from_parts(
+            vec![(PathBuf::from("scenes/a b.xml"), 7), (PathBuf::from("m/x=1 .ply"), u64::MAX)],
+            &["spp=4".into()],
+        );
         save(&path, &recorded, &film).unwrap();
         assert_eq!(load(&path).unwrap().0, recorded);
         assert_eq!(film_back.sum_squares(), &squares[..]);
@@ -189,6 +256,14 @@ mod tests {
         assert!(message.contains("expected 288 bytes"), "{message}");
         std::fs::write(&path, b"hello\n\n").unwrap();
         assert!(load(&path).unwrap_err().to_string().contains("first line"));
+        // Another version, and the previous format.
+        let text = String::from_utf8_lossy(&bytes[..bytes.len() - 5]).replace(VERSION, "0.0.1-other");
+        std::fs::write(&path, text.as_bytes()).unwrap();
+        let message = load(&path).unwrap_err().to_string();
+        assert!(message.contains("written by vcm 0.0.1-other") && message.contains(VERSION), "{message}");
+        std::fs::write(&path, b"vcm-checkpoint 2\nmask=1\n\n").unwrap();
+        let message = load(&path).unwrap_err().to_string();
+        assert!(message.contains("has format 2") && message.contains("reads format 3"), "{message}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -1,0 +1,45 @@
+//! One render session for every front end (the `vcm` command line today; a Python module and
+//! MPI ranks next): a [`Request`] in, an [`Outcome`] out. The session resolves and loads the
+//! scene, validates the settings, runs the memory guard, saves and resumes checkpoints, renders
+//! through [`render::driver`], writes the outputs and composes the summary line.
+//!
+//! Front ends only translate their arguments into a [`Request`] and present the result:
+//! errors are values ([`anyhow::Error`], messages naming the setting as the command line spells
+//! it), nothing here prints or exits; messages for the user arrive through [`Observer`], and the
+//! progress bar is switched by [`Request::progress`].
+
+pub mod checkpoint;
+pub mod fingerprint;
+pub mod guard;
+pub mod outputs;
+mod request;
+mod run;
+pub mod source;
+mod summary;
+
+pub use request::{Request, radius_mode_from_name, radius_mode_name};
+pub use run::{Observer, Outcome, render};
+pub use source::{LoadedScene, SceneSource, load_scene, scene_source};
+pub use summary::Summary;
+
+/// A message for the user from a session.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Notice {
+    /// Something the user should look at (e.g. a scene-file attribute that was skipped).
+    Warning(String),
+    /// A decision the session took for the user (e.g. switching to the memory-efficient mode).
+    Note(String),
+    /// Progress information (e.g. what was loaded and how long it took); quiet front ends
+    /// drop it.
+    Progress(String),
+}
+
+impl std::fmt::Display for Notice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Notice::Warning(text) => write!(f, "warning: {text}"),
+            Notice::Note(text) => write!(f, "note: {text}"),
+            Notice::Progress(text) => f.write_str(text),
+        }
+    }
+}

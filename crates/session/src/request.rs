@@ -1,0 +1,120 @@
+//! What a front end asks a session for.
+
+use render::path_tracer::{Heuristic, RussianRoulette};
+use std::path::PathBuf;
+use std::time::Duration;
+
+use render::driver::Budget;
+use render::vcm::RadiusMode;
+use render::{Algorithm, RenderSettings};
+
+use crate::source::SceneSource;
+
+/// Everything a render session needs. [`Request::new`] gives the command line's defaults.
+#[derive(Clone, Debug)]
+pub struct Request {
+    /// The scene.
+    pub scene: SceneSource,
+    /// Image size in pixels (default: the scene file's film, 512×512 for built-in scenes).
+    pub resolution: Option<(u32, u32)>,
+    /// The algorithm.
+    pub algorithm: Algorithm,
+    /// When to stop; `Iterations` counts a resumed checkpoint's iterations too.
+    pub budget: Budget,
+    /// Maximum path length in segments (default: the scene file's, 10 for built-in scenes).
+    pub max_length: Option<u32>,
+    /// Seed of the random streams.
+    pub seed: u64,
+    /// Initial merging radius as a fraction of the scene's bounding-sphere radius.
+    pub radius_factor: f32,
+    /// Merging radius reduction α, in (0, 1].
+    pub radius_alpha: f32,
+    /// Global or per-pixel merging radius.
+    pub radius_mode: RadiusMode,
+    /// Memory-efficient progressive VCM (tech report §6.2).
+    pub memory_efficient: bool,
+    /// Spectral rendering.
+    pub spectral: bool,
+    /// Worker threads (0: all cores).
+    pub threads: usize,
+    /// Bytes the light vertices and merging grid may use (default: half the physical memory).
+    pub max_memory: Option<u64>,
+    /// Draw a progress bar (on a terminal).
+    pub progress: bool,
+    /// The image file (format by extension; linear formats get a `.png` preview beside them).
+    /// `None`: write no image (the film is in [`crate::Outcome`]).
+    pub output: Option<PathBuf>,
+    /// Exposure of PNG outputs in stops.
+    pub exposure: f32,
+    /// Per-pixel variance of the mean, to this linear image file.
+    pub variance: Option<PathBuf>,
+    /// Per-technique images into this directory (VCM engine algorithms only), with per-(s, t)
+    /// images up to `technique_length` segments.
+    pub techniques: Option<PathBuf>,
+    /// See `techniques` (1 to 8).
+    pub technique_length: u32,
+    /// Save the render's state to this file every `checkpoint_every` and at the end.
+    pub checkpoint: Option<PathBuf>,
+    /// Wall-clock time between checkpoints (zero: after every iteration).
+    pub checkpoint_every: Duration,
+    /// Continue the render saved in this file: scene, algorithm, resolution, seed, path
+    /// length, radius, memory-efficient and spectral settings come from it (those fields are
+    /// ignored), and it is checkpointed to again unless `checkpoint` is set.
+    pub resume: Option<PathBuf>,
+    /// Russian roulette of the path tracer (`pt`).
+    pub russian_roulette: RussianRoulette,
+    /// MIS heuristic of the path tracer (`pt`).
+    pub heuristic: Heuristic,
+}
+
+impl Request {
+    /// A request for `scene` with the command line's defaults: VCM, 64 iterations, seed 0,
+    /// radius factor 0.003, α 0.75, global radius, RGB, all cores, no outputs, checkpoints
+    /// every 60 s when a checkpoint file is set.
+    pub fn new(scene: SceneSource) -> Self {
+        let defaults = RenderSettings::default();
+        Self {
+            scene,
+            resolution: None,
+            algorithm: Algorithm::from_name("vcm").expect("vcm is an algorithm"),
+            budget: Budget::Iterations(64),
+            max_length: None,
+            seed: 0,
+            radius_factor: defaults.radius_factor,
+            radius_alpha: defaults.radius_alpha,
+            radius_mode: RadiusMode::Global,
+            memory_efficient: false,
+            spectral: false,
+            threads: 0,
+            max_memory: None,
+            progress: false,
+            output: None,
+            exposure: 0.0,
+            variance: None,
+            techniques: None,
+            technique_length: 4,
+            checkpoint: None,
+            checkpoint_every: Duration::from_secs(60),
+            resume: None,
+            russian_roulette: defaults.russian_roulette,
+            heuristic: defaults.heuristic,
+        }
+    }
+}
+
+/// The command line's name of a radius mode (`global`, `per-pixel`), as checkpoints record it.
+pub fn radius_mode_name(mode: RadiusMode) -> &'static str {
+    match mode {
+        RadiusMode::Global => "global",
+        RadiusMode::PerPixel => "per-pixel",
+    }
+}
+
+/// Parses [`radius_mode_name`]'s names.
+pub fn radius_mode_from_name(name: &str) -> Option<RadiusMode> {
+    match name {
+        "global" => Some(RadiusMode::Global),
+        "per-pixel" => Some(RadiusMode::PerPixel),
+        _ => None,
+    }
+}

@@ -1,0 +1,88 @@
+//! The session as a front end other than the CLI uses it: no files written unless asked,
+//! messages arrive as values through the observer, errors are returned, and a resumed session
+//! continues the film exactly.
+
+use render::Algorithm;
+use render::driver::Budget;
+use session::{Notice, Observer, Request};
+
+#[derive(Default)]
+struct Collect {
+    notices: Vec<Notice>,
+    started: usize,
+}
+
+impl Observer for Collect {
+    fn notice(&mut self, notice: Notice) {
+        self.notices.push(notice);
+    }
+
+    fn starting(&mut self) {
+        self.started += 1;
+    }
+}
+
+fn request(algorithm: &str) -> Request {
+    Request {
+        resolution: Some((16, 12)),
+        algorithm: Algorithm::from_name(algorithm).unwrap(),
+        budget: Budget::Iterations(2),
+        threads: 1,
+        ..Request::new(session::scene_source("1", &[]).unwrap())
+    }
+}
+
+#[test]
+fn a_session_renders_in_memory_and_reports_through_the_observer() {
+    let mut observer = Collect::default();
+    let outcome = session::render(&request("vcm"), None, &mut observer).unwrap();
+    assert_eq!(observer.started, 1);
+    assert!(observer.notices.is_empty(), "{:?}", observer.notices);
+    assert_eq!(outcome.output.film.iterations(), 2);
+    assert_eq!((outcome.summary.resolution, outcome.summary.written.len()), ((16, 12), 0));
+    assert!(outcome.summary.to_string().starts_with("cornell-area-mirror with vcm at 16x12: 2 iterations"));
+
+    // The memory guard's switch is a note, not a print.
+    let mut observer = Collect::default();
+    // BPT at 512x512 needs about 75 MiB more than the process holds in the default mode and
+    // about 40 MiB in the memory-efficient mode, which stores no light vertex.
+    let resident = render::vcm::memory::resident_bytes().unwrap();
+    let tight = Request {
+        max_memory: Some(resident + (57 << 20)),
+        resolution: Some((512, 512)),
+        budget: Budget::Iterations(1),
+        threads: 2,
+        ..request("bpt")
+    };
+    session::render(&tight, None, &mut observer).unwrap();
+    assert!(
+        matches!(&observer.notices[..], [Notice::Note(n)] if n.contains("switching to --memory-efficient")),
+        "{:?}",
+        observer.notices
+    );
+
+    // Bad settings are errors before anything starts.
+    let mut observer = Collect::default();
+    let error = session::render(&Request { radius_alpha: 1.5, ..request("vcm") }, None, &mut observer).unwrap_err();
+    assert!(error.to_string().contains("--radius-alpha must be in (0, 1]"), "{error}");
+    assert_eq!(observer.started, 0);
+}
+
+#[test]
+fn a_resumed_session_continues_the_film_exactly() {
+    let dir = std::env::temp_dir().join(format!("vcm-session-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let checkpoint = dir.join("c.ckpt");
+    let first = Request { checkpoint: Some(checkpoint.clone()), ..request("bpm") };
+    session::render(&first, None, &mut Collect::default()).unwrap();
+    // Settings that the checkpoint records are taken from it, whatever the request says.
+    let resumed =
+        Request { resume: Some(checkpoint.clone()), budget: Budget::Iterations(5), seed: 77, ..request("pt") };
+    let outcome = session::render(&resumed, None, &mut Collect::default()).unwrap();
+    assert_eq!((outcome.summary.algorithm, outcome.summary.resumed_after), ("bpm", Some(2)));
+    let straight =
+        session::render(&Request { budget: Budget::Iterations(5), ..request("bpm") }, None, &mut Collect::default())
+            .unwrap();
+    assert_eq!(outcome.output.film.sums(), straight.output.film.sums(), "resumed film differs");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
