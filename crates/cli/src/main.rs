@@ -125,6 +125,10 @@ struct RenderArgs {
     /// upsampled to spectra, dispersion; the image is still written in linear sRGB.
     #[arg(long)]
     spectral: bool,
+    /// Scene-file parameters that would change the image and are not supported become
+    /// warnings instead of errors (the render then differs from what the file describes).
+    #[arg(long)]
+    permissive: bool,
     /// Russian roulette of the path tracer (pt): N = Mitsuba 3's rule from bounce N on
     /// (survival min(max throughput, 0.95)), or `albedo` = the BSDF's continuation probability at
     /// every bounce (the VCM engine's rule, which the other algorithms always use).
@@ -196,7 +200,7 @@ fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
 /// Loads a scene for the subcommands that render without a session (`bench`, `report`),
 /// printing the loader's warnings and, unless `quiet`, what was loaded.
 fn load_scene(source: &SceneSource, resolution: Option<(u32, u32)>, quiet: bool) -> Result<LoadedScene> {
-    let loaded = session::load_scene(source, resolution)?;
+    let loaded = session::load_scene(source, resolution, false)?;
     for warning in &loaded.warnings {
         eprintln!("{}", Notice::Warning(warning.clone()));
     }
@@ -251,9 +255,10 @@ fn run_render(args: RenderArgs) -> Result<()> {
     }
     let budget = match (args.iterations, args.time) {
         (_, Some(t)) if !(t.is_finite() && t > 0.0) => bail!("--time must be a positive number of seconds, got {t}"),
-        (_, Some(t)) => Budget::Time(Duration::from_secs_f64(t)),
-        (Some(n), None) => Budget::Iterations(n),
-        (None, None) => Budget::Iterations(64),
+        (_, Some(t)) => Some(Budget::Time(Duration::from_secs_f64(t))),
+        (Some(n), None) => Some(Budget::Iterations(n)),
+        // The scene file's sample count, or 64.
+        (None, None) => None,
     };
     let scene = match (&args.resume, args.scene_mask) {
         // Replaced by the checkpoint's scene.
@@ -287,6 +292,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         checkpoint: args.checkpoint,
         checkpoint_every: Duration::from_secs_f64(args.checkpoint_every),
         resume: args.resume,
+        permissive: args.permissive,
         russian_roulette: args.rr_depth,
         heuristic: args.heuristic,
     };

@@ -32,16 +32,17 @@ impl Drop for Recording {
     }
 }
 
-/// [`crate::load_scene`], also returning every file the load read, in the order first read,
+/// [`crate::load_scene_with`], also returning every file the load read, in the order first read,
 /// each once, spelled as the loader opened it (relative paths stay relative to the working
 /// directory). The scene file itself comes first.
 pub fn load_scene_traced(
     path: &Path,
     defines: &[(String, String)],
-) -> Result<(scene::desc::SceneDescription, Vec<PathBuf>), SceneError> {
+    options: &crate::LoadOptions,
+) -> Result<(crate::LoadedScene, Vec<PathBuf>), SceneError> {
     let recording = Recording;
     OPENED.with(|o| *o.borrow_mut() = Some(Vec::new()));
-    let scene = crate::load_scene(path, defines);
+    let scene = crate::load_scene_with(path, defines, options);
     let files = OPENED.with(|o| o.borrow_mut().take()).unwrap_or_default();
     drop(recording);
     Ok((scene?, files))
@@ -88,7 +89,7 @@ mod tests {
         std::fs::write(dir.join("quad.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n").unwrap();
         write_pixel_image(&dir.join("tex.png"));
         write_pixel_image(&dir.join("env.exr"));
-        let (_, files) = load_scene_traced(&main, &[]).unwrap();
+        let (_, files) = load_scene_traced(&main, &[], &Default::default()).unwrap();
         let names: Vec<String> =
             files.iter().map(|f| f.strip_prefix(&dir).unwrap_or(f).display().to_string()).collect();
         assert_eq!(names, ["main.xml", "parts.xml", "tex.png", "quad.obj", "env.exr"]);
@@ -115,10 +116,10 @@ mod tests {
         )
         .unwrap();
         write_pixel_image(&dir.join("tex.pfm"));
-        let (_, files) = load_scene_traced(&main, &[]).unwrap();
+        let (_, files) = load_scene_traced(&main, &[], &Default::default()).unwrap();
         assert_eq!(files, [main.clone(), dir.join("part.pbrt"), dir.join("tex.pfm")]);
         // A failed load still ends the recording.
-        assert!(load_scene_traced(&dir.join("absent.pbrt"), &[]).is_err());
+        assert!(load_scene_traced(&dir.join("absent.pbrt"), &[], &Default::default()).is_err());
         assert!(OPENED.with(|o| o.borrow().is_none()));
         std::fs::remove_dir_all(&dir).unwrap();
     }

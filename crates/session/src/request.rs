@@ -19,8 +19,13 @@ pub struct Request {
     pub resolution: Option<(u32, u32)>,
     /// The algorithm.
     pub algorithm: Algorithm,
-    /// When to stop; `Iterations` counts a resumed checkpoint's iterations too.
-    pub budget: Budget,
+    /// When to stop; `Iterations` counts a resumed checkpoint's iterations too. `None`: as many
+    /// iterations as the scene file's samples per pixel (Mitsuba's `<sampler>` `sample_count`,
+    /// pbrt's `pixelsamples`; one sample per pixel per iteration), otherwise 64.
+    pub budget: Option<Budget>,
+    /// Unsupported scene-file parameters that would change the image are warnings instead of
+    /// errors.
+    pub permissive: bool,
     /// Maximum path length in segments (default: the scene file's, 10 for built-in scenes).
     pub max_length: Option<u32>,
     /// Seed of the random streams.
@@ -77,7 +82,8 @@ impl Request {
             scene,
             resolution: None,
             algorithm: Algorithm::from_name("vcm").expect("vcm is an algorithm"),
-            budget: Budget::Iterations(64),
+            budget: None,
+            permissive: false,
             max_length: None,
             seed: 0,
             radius_factor: defaults.radius_factor,

@@ -96,14 +96,14 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
         None => None,
     };
 
-    let loaded = load_scene(&r.scene, r.resolution)?;
+    let loaded = load_scene(&r.scene, r.resolution, r.permissive)?;
     for warning in &loaded.warnings {
         observer.notice(Notice::Warning(warning.clone()));
     }
     if let Some(line) = &loaded.loaded {
         observer.notice(Notice::Progress(line.clone()));
     }
-    let LoadedScene { scene, file_max_length, fingerprint, .. } = loaded;
+    let LoadedScene { scene, file_max_length, file_samples, fingerprint, .. } = loaded;
     if let Some((_, recorded, path)) = &resumed
         && let Some(difference) = fingerprint.difference(recorded)
     {
@@ -115,7 +115,7 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
     }
     let mut settings = RenderSettings {
         algorithm: r.algorithm,
-        budget: r.budget,
+        budget: r.budget.unwrap_or(Budget::Iterations(file_samples.unwrap_or(DEFAULT_ITERATIONS))),
         max_length: r.max_length.or(file_max_length).unwrap_or(10),
         seed: r.seed,
         threads: r.threads,
@@ -223,6 +223,9 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
 
 /// Checks the settings that do not need the scene; messages name them as the command line
 /// does.
+/// Iterations of a render whose request and scene name no budget.
+pub const DEFAULT_ITERATIONS: u64 = 64;
+
 fn validate(r: &Request, resumed: bool) -> Result<()> {
     if !(r.radius_factor.is_finite() && r.radius_factor > 0.0) {
         bail!("--radius-factor must be a positive number, got {}", r.radius_factor);
@@ -234,8 +237,8 @@ fn validate(r: &Request, resumed: bool) -> Result<()> {
         bail!("--max-length must be at least 1");
     }
     match r.budget {
-        Budget::Iterations(0) => bail!("--iterations must be at least 1"),
-        Budget::Time(t) if t.is_zero() => bail!("--time must be a positive number of seconds, got 0"),
+        Some(Budget::Iterations(0)) => bail!("--iterations must be at least 1"),
+        Some(Budget::Time(t)) if t.is_zero() => bail!("--time must be a positive number of seconds, got 0"),
         _ => {}
     }
     if r.techniques.is_some() {

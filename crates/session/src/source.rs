@@ -45,6 +45,8 @@ pub struct LoadedScene {
     pub scene: Scene,
     /// Path length from the file's integrator (`None`: a built-in scene).
     pub file_max_length: Option<u32>,
+    /// Samples per pixel the file asks for (its sampler), if any.
+    pub file_samples: Option<u64>,
     /// What the scene was built from (checkpoints record it).
     pub fingerprint: Fingerprint,
     /// Loader warnings (skipped optional attributes) for the user.
@@ -59,8 +61,9 @@ pub struct LoadedScene {
 pub const UNLIMITED_PATH_LENGTH: u32 = 100;
 
 /// Loads or builds the scene; `resolution` (pixels) overrides the file's film, built-in scenes
-/// default to 512×512.
-pub fn load_scene(source: &SceneSource, resolution: Option<(u32, u32)>) -> Result<LoadedScene> {
+/// default to 512×512. `permissive` turns unsupported parameters that would change the image
+/// from errors into warnings.
+pub fn load_scene(source: &SceneSource, resolution: Option<(u32, u32)>, permissive: bool) -> Result<LoadedScene> {
     match source {
         SceneSource::Builtin(mask) => {
             let (width, height) = resolution.unwrap_or((512, 512));
@@ -69,6 +72,7 @@ pub fn load_scene(source: &SceneSource, resolution: Option<(u32, u32)>) -> Resul
             Ok(LoadedScene {
                 scene,
                 file_max_length: None,
+                file_samples: None,
                 fingerprint: Fingerprint::builtin(*mask, (width, height)),
                 warnings: Vec::new(),
                 loaded: None,
@@ -77,7 +81,13 @@ pub fn load_scene(source: &SceneSource, resolution: Option<(u32, u32)>) -> Resul
         SceneSource::File(path, defines) => {
             let pairs = parse_defines(defines)?;
             let start = Instant::now();
-            let (desc, files) = io::load_scene_traced(path, &pairs)?;
+            let options = io::LoadOptions { permissive };
+            let (loaded, files) = io::load_scene_traced(path, &pairs, &options).map_err(|e| {
+                let message = e.to_string().replace("a permissive load would continue", "--permissive would continue");
+                anyhow::anyhow!(message)
+            })?;
+            let file_samples = loaded.settings.samples_per_pixel.map(u64::from);
+            let desc = loaded.description;
             let (scene, report) =
                 Scene::from_description(&desc, resolution).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
             let loaded = format!(
@@ -96,6 +106,7 @@ pub fn load_scene(source: &SceneSource, resolution: Option<(u32, u32)>) -> Resul
             Ok(LoadedScene {
                 scene,
                 file_max_length: Some(desc.max_path_length.unwrap_or(UNLIMITED_PATH_LENGTH)),
+                file_samples,
                 fingerprint: Fingerprint::of_files(&files, defines)?,
                 warnings: desc.warnings.clone(),
                 loaded: Some(loaded),

@@ -26,7 +26,7 @@ fn request(algorithm: &str) -> Request {
     Request {
         resolution: Some((16, 12)),
         algorithm: Algorithm::from_name(algorithm).unwrap(),
-        budget: Budget::Iterations(2),
+        budget: Some(Budget::Iterations(2)),
         threads: 1,
         ..Request::new(session::scene_source("1", &[]).unwrap())
     }
@@ -50,7 +50,7 @@ fn a_session_renders_in_memory_and_reports_through_the_observer() {
     let tight = Request {
         max_memory: Some(resident + (57 << 20)),
         resolution: Some((512, 512)),
-        budget: Budget::Iterations(1),
+        budget: Some(Budget::Iterations(1)),
         threads: 2,
         ..request("bpt")
     };
@@ -77,12 +77,15 @@ fn a_resumed_session_continues_the_film_exactly() {
     session::render(&first, None, &mut Collect::default()).unwrap();
     // Settings that the checkpoint records are taken from it, whatever the request says.
     let resumed =
-        Request { resume: Some(checkpoint.clone()), budget: Budget::Iterations(5), seed: 77, ..request("pt") };
+        Request { resume: Some(checkpoint.clone()), budget: Some(Budget::Iterations(5)), seed: 77, ..request("pt") };
     let outcome = session::render(&resumed, None, &mut Collect::default()).unwrap();
     assert_eq!((outcome.summary.algorithm, outcome.summary.resumed_after), ("bpm", Some(2)));
-    let straight =
-        session::render(&Request { budget: Budget::Iterations(5), ..request("bpm") }, None, &mut Collect::default())
-            .unwrap();
+    let straight = session::render(
+        &Request { budget: Some(Budget::Iterations(5)), ..request("bpm") },
+        None,
+        &mut Collect::default(),
+    )
+    .unwrap();
     assert_eq!(outcome.output.film.sums(), straight.output.film.sums(), "resumed film differs");
     std::fs::remove_dir_all(&dir).unwrap();
 }
