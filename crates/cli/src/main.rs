@@ -480,6 +480,7 @@ fn run_render(mut args: RenderArgs) -> Result<()> {
         },
         memory_efficient: args.memory_efficient,
         spectral: args.spectral,
+        wavelength_groups: render::vcm::wavelengths::DEFAULT_WAVELENGTH_GROUPS,
     };
     if let Some(vcm_settings) = settings.vcm_settings()
         && !settings.memory_efficient

@@ -89,6 +89,9 @@ pub struct RenderSettings {
     /// Spectral mode: hero wavelength sampling with four wavelengths per path
     /// ([`spectrum::Hero4`]); RGB otherwise.
     pub spectral: bool,
+    /// Spectral mode with merging: wavelength groups per iteration
+    /// ([`crate::vcm::VcmSettings::wavelength_groups`]).
+    pub wavelength_groups: u32,
 }
 
 impl Default for RenderSettings {
@@ -105,6 +108,7 @@ impl Default for RenderSettings {
             radius_mode: RadiusMode::Global,
             memory_efficient: false,
             spectral: false,
+            wavelength_groups: crate::vcm::wavelengths::DEFAULT_WAVELENGTH_GROUPS,
         }
     }
 }
@@ -121,6 +125,7 @@ impl RenderSettings {
                 radius_mode: self.radius_mode,
                 memory_efficient: self.memory_efficient,
                 spectral: self.spectral,
+                wavelength_groups: self.wavelength_groups,
             }),
             _ => None,
         }

@@ -33,6 +33,22 @@ pub struct MergeSource<'a, S: SpectralMode = Rgb> {
     /// The vertices' dVC/dVM were computed for other constants (another radius or iteration):
     /// rebuild them from cVC/cVM (eqs. 62, 63).
     pub rebase: bool,
+    /// Merge only with the light vertices of this wavelength group (`None`: with all).
+    pub group: Option<MergeGroup>,
+}
+
+/// The light vertices of one wavelength group (spectral mode, `super::wavelengths`): those
+/// the grid was built with at indices `first..end`, and the factor that turns the kernel
+/// normalisation 1/(π r² N_VM) of the MIS constants into 1/(π r² n_g) for the group's exact
+/// number n_g of light sub-paths (N_VM is the average N_L/K).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MergeGroup {
+    /// First grid index of the group's vertices.
+    pub first: u32,
+    /// One past the last.
+    pub end: u32,
+    /// N_VM / n_g (dimensionless).
+    pub normalization_scale: f32,
 }
 
 /// The merged contribution at camera vertex `position` within `radius` (throughput and kernel
@@ -57,7 +73,11 @@ pub fn merge<S: SpectralMode, R: Record>(
     let label = end.fluorescent.map(|f| (f, f.sample_label::<S>(rng.uniform())));
     let continuation = bsdf.continuation_probability();
     let mut sum = S::default();
-    source.grid.for_each_slot_within(position, radius, |slot| {
+    let normalization = match source.group {
+        None => k.vm_normalization,
+        Some(group) => k.vm_normalization * group.normalization_scale,
+    };
+    let visit = |slot: usize| {
         let light = &source.vertices[slot];
         // A merged path is one segment shorter than a connected one.
         if u32::from(light.path_length) + camera.path_length > max_length {
@@ -84,9 +104,13 @@ pub fn merge<S: SpectralMode, R: Record>(
         sum += part;
         if R::PER_TECHNIQUE {
             let t = camera.path_length + 1;
-            let value = camera.throughput * view(&camera.slots, part) * k.vm_normalization;
+            let value = camera.throughput * view(&camera.slots, part) * normalization;
             out.stage_merge(u32::from(light.path_length) + 1, t, value.to_rgb(wavelengths));
         }
-    });
-    camera.throughput * view(&camera.slots, sum) * k.vm_normalization
+    };
+    match source.group {
+        None => source.grid.for_each_slot_within(position, radius, visit),
+        Some(g) => source.grid.for_each_slot_within_indices(position, radius, g.first..g.end, visit),
+    }
+    camera.throughput * view(&camera.slots, sum) * normalization
 }

@@ -24,10 +24,10 @@
 //!
 //! **Spectral mode.** The passes are generic over [`SpectralMode`]; [`VcmEngine`] picks
 //! [`Rgb`] or [`Hero4`] once, from [`VcmSettings::spectral`]. Sub-paths that meet must carry
-//! the same wavelengths: with merging on, every sub-path of an iteration uses the iteration's
-//! set (any light vertex may meet any camera path); without merging, light sub-path `i` and
-//! camera path `i` (the only pair that is connected) share the set of index `i`, so that the
-//! image sees many wavelengths per iteration. Light tracing splats and camera paths convert
+//! the same wavelengths ([`wavelengths`]): without merging, light sub-path `i` and camera
+//! path `i` (the only pair that is connected) share the set of index `i`; with merging, the
+//! sub-paths are split into wavelength groups with a set each, and a camera vertex merges only
+//! with the light vertices of its group. Light tracing splats and camera paths convert
 //! their estimates to linear sRGB as they are made ([`SpectralMode::to_rgb`]), so the film, the
 //! technique images and the NaN counting are the same in both modes.
 //!
@@ -44,6 +44,7 @@ pub mod merge;
 pub mod mis;
 pub mod subpath;
 pub mod technique_images;
+pub mod wavelengths;
 
 use math::{Rng, Vec2};
 use rayon::prelude::*;
@@ -55,9 +56,10 @@ use camera_pass::trace_camera_path_recorded;
 use connect::{Splat, SplatTarget};
 use light_pass::trace_light_path;
 use light_vertex::{LightVertex, LightVertexStore, MergeVertex};
-use merge::MergeSource;
+use merge::{MergeGroup, MergeSource};
 use mis::MisConstants;
 use technique_images::{TechniqueFrame, TechniqueLayout, TechniqueValues};
+use wavelengths::{DEFAULT_WAVELENGTH_GROUPS, WavelengthSource};
 
 /// The algorithms of the VCM engine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -219,10 +221,14 @@ pub struct VcmSettings {
     pub memory_efficient: bool,
     /// Spectral mode: four hero-rotated wavelengths per path ([`Hero4`]) instead of RGB.
     pub spectral: bool,
+    /// Spectral mode with merging (two-stage mode): the number K of wavelength groups per
+    /// iteration ([`wavelengths`]); 1 is one set for the whole iteration. Ignored otherwise.
+    pub wavelength_groups: u32,
 }
 
 impl VcmSettings {
-    /// Defaults: radius factor 0.003, α = 0.75, 10 segments, global radius, two-stage mode.
+    /// Defaults: radius factor 0.003, α = 0.75, 10 segments, global radius, two-stage mode,
+    /// [`DEFAULT_WAVELENGTH_GROUPS`] wavelength groups.
     pub fn new(algorithm: VcmAlgorithm) -> Self {
         Self {
             algorithm,
@@ -232,6 +238,7 @@ impl VcmSettings {
             radius_mode: RadiusMode::Global,
             memory_efficient: false,
             spectral: false,
+            wavelength_groups: DEFAULT_WAVELENGTH_GROUPS,
         }
     }
 }
@@ -263,8 +270,9 @@ impl Iteration<'_> {
     pub fn pixel_constants(&self, pixel: usize) -> MisConstants {
         match self.pixel_radii {
             None => self.constants,
-            Some(r) => MisConstants::new(
-                self.constants.light_path_count as usize,
+            Some(r) => MisConstants::with_merge_paths(
+                self.constants.light_path_count,
+                self.constants.merge_path_count,
                 r[pixel],
                 self.techniques.connect,
                 self.techniques.merge,
@@ -319,49 +327,6 @@ const LIGHT_STREAM: u64 = 1 << 62;
 
 /// Iteration index of the extra light pass that seeds merging in the memory-efficient mode.
 const SEED_ITERATION: u64 = u64::MAX;
-
-/// Offset of the random streams that draw wavelengths (spectral mode only, so RGB renders draw
-/// exactly the numbers they drew before spectral mode existed).
-const WAVELENGTH_STREAM: u64 = 1 << 61;
-
-/// Stream index of the wavelengths shared by all sub-paths of an iteration (merging on).
-const SHARED_WAVELENGTHS: u64 = (1 << 61) - 1;
-
-/// Where the sub-paths of one iteration get their wavelengths: one set for the whole iteration
-/// (`shared`, merging on), or one per light/camera sub-path pair. `paired` (the scene has
-/// fluorescence, see [`spectrum::Wavelengths4::paired`]) is decided once per iteration.
-struct WavelengthSource<S: SpectralMode> {
-    shared: Option<S::Wavelengths>,
-    paired: bool,
-}
-
-impl<S: SpectralMode> WavelengthSource<S> {
-    /// The source of iteration `iteration` of `scene`; shared when `merge`.
-    fn new(scene: &Scene, seed: u64, iteration: u64, merge: bool) -> Self {
-        let mut source = Self { shared: None, paired: scene.has_fluorescence() };
-        if merge {
-            source.shared = Some(source.draw(seed, iteration, SHARED_WAVELENGTHS));
-        }
-        source
-    }
-
-    /// Draws the set of stream `index` (two numbers of its own stream).
-    #[inline]
-    fn draw(&self, seed: u64, iteration: u64, index: u64) -> S::Wavelengths {
-        let mut rng = Rng::for_stream(seed, iteration, WAVELENGTH_STREAM | index);
-        let (u, v) = (rng.uniform(), rng.uniform());
-        S::sample_wavelengths(u, v, self.paired)
-    }
-
-    /// The wavelengths of sub-path pair `index` of `iteration`, or the iteration's shared set.
-    #[inline]
-    fn get(&self, seed: u64, iteration: u64, index: u64) -> S::Wavelengths {
-        match &self.shared {
-            Some(w) => *w,
-            None => self.draw(seed, iteration, index),
-        }
-    }
-}
 
 /// The engine and its buffers (kept across iterations), in RGB or spectral mode.
 pub struct VcmEngine {
@@ -465,6 +430,8 @@ struct Engine<S: SpectralMode> {
     stats: IterationStats,
     /// The memory-efficient mode has light vertices to merge with.
     merge_seeded: bool,
+    /// The wavelength groups' ranges in the grid (spectral mode with merging; else empty).
+    merge_groups: Vec<MergeGroup>,
 }
 
 /// One chunk of light sub-paths: vertices, per-path ends (relative), splats.
@@ -493,6 +460,7 @@ impl<S: SpectralMode> Engine<S> {
             technique_frame: None,
             stats: IterationStats::default(),
             merge_seeded: false,
+            merge_groups: Vec::new(),
         }
     }
 
@@ -518,14 +486,27 @@ impl<S: SpectralMode> Engine<S> {
             // The grid must cover the largest per-pixel radius.
             radius = pixel_radii.iter().fold(0.0f32, |a, b| a.max(*b));
         }
+        // Wavelength groups: spectral mode, merging, two-stage mode (the memory-efficient mode
+        // cannot pair wavelengths across iterations; the driver refuses it).
+        let grouped = self.settings.spectral && techniques.merge && !self.settings.memory_efficient;
+        let groups = if grouped { self.settings.wavelength_groups.max(1) } else { 1 };
+        let light_paths = pixel_count as f32;
+        let merge_paths = if groups > 1 { light_paths / groups as f32 } else { light_paths };
         let it = Iteration {
-            constants: MisConstants::new(pixel_count, radius, techniques.connect, techniques.merge),
+            constants: MisConstants::with_merge_paths(
+                light_paths,
+                merge_paths,
+                radius,
+                techniques.connect,
+                techniques.merge,
+            ),
             max_length: self.settings.max_length,
             radius,
             pixel_radii: self.pixel_footprints.as_ref().map(|_| pixel_radii.as_slice()),
             techniques,
         };
-        let sets = WavelengthSource::<S>::new(scene, seed, iteration, techniques.merge);
+        let width = frame.width as usize;
+        let sets = WavelengthSource::<S>::new(scene, seed, iteration, techniques.merge, groups, width, pixel_count);
         let (rejected, splats) = if self.settings.memory_efficient && !techniques.light_trace_only {
             self.run_single_stage(scene, seed, iteration, &it, frame, &sets)
         } else {
@@ -560,11 +541,12 @@ impl<S: SpectralMode> Engine<S> {
         }
         let light_pass = start.elapsed();
         if it.techniques.merge {
-            self.build_merge_grid(it.radius);
+            self.build_merge_grid(it.radius, sets.groups().map(|g| (g, it.constants.merge_path_count)));
         }
         let grid_build = start.elapsed() - light_pass;
         let store = &self.store;
-        let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: it.rebase() };
+        let groups = (sets.groups(), self.merge_groups.as_slice());
+        let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: it.rebase(), group: None };
         let merge_source = it.techniques.merge.then_some(source);
         let width = frame.width as usize;
         let mut rejected =
@@ -576,8 +558,23 @@ impl<S: SpectralMode> Engine<S> {
                 let (x, y) = ((index % width) as u32, (index / width) as u32);
                 let light_path = store.path(index);
                 let wavelengths = sets.get(seed, iteration, index as u64);
-                let merge = merge_source.as_ref();
-                trace_camera_path_recorded(scene, it, x, y, &mut rng, light_path, merge, &wavelengths, techniques)
+                let merge = match groups {
+                    (Some(layout), ranges) => {
+                        merge_source.map(|s| MergeSource { group: Some(ranges[layout.group_of(index)]), ..s })
+                    }
+                    (None, _) => merge_source,
+                };
+                trace_camera_path_recorded(
+                    scene,
+                    it,
+                    x,
+                    y,
+                    &mut rng,
+                    light_path,
+                    merge.as_ref(),
+                    &wavelengths,
+                    techniques,
+                )
             });
         let camera_pass = start.elapsed() - light_pass - grid_build;
         let splats = chunks.iter().map(|c| c.2.len()).sum();
@@ -618,13 +615,13 @@ impl<S: SpectralMode> Engine<S> {
             for (vertices, _, _) in &chunks {
                 self.store.vertices.extend_from_slice(vertices);
             }
-            self.build_merge_grid(it.radius);
+            self.build_merge_grid(it.radius, None);
             self.merge_seeded = true;
         }
         // Every row traces its pixels' light sub-paths and camera paths; rows return their
         // light vertices (for the next iteration's merging) and splats.
         let width = frame.width as usize;
-        let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: true };
+        let source = MergeSource { vertices: &self.merge_vertices, grid: &self.grid, rebase: true, group: None };
         let merge_source = it.techniques.merge.then_some(source);
         let family_frames = self.family_frames.as_mut();
         let layout = self.technique_frame.as_ref().map(|t| t.layout);
@@ -708,7 +705,7 @@ impl<S: SpectralMode> Engine<S> {
                 None => self.radius(iteration + 1),
                 Some(f) => f.iter().fold(0.0f32, |a, b| a.max(*b)) * self.schedule(iteration + 1),
             };
-            self.build_merge_grid(next.max(1e-7));
+            self.build_merge_grid(next.max(1e-7), None);
         }
         self.stats.light_vertices = self.merge_vertices.len();
         self.stats.bytes_per_vertex = std::mem::size_of::<MergeVertex<S>>();
@@ -716,16 +713,31 @@ impl<S: SpectralMode> Engine<S> {
     }
 
     /// Builds the grid over the stored light vertices and lays their merging data out in the
-    /// grid's slot order.
-    fn build_merge_grid(&mut self, radius: f32) {
+    /// grid's slot order. With wavelength groups (their layout and N_VM) the vertices enter the
+    /// grid group after group and [`Engine::merge_groups`] gets each group's range.
+    fn build_merge_grid(&mut self, radius: f32, groups: Option<(&wavelengths::GroupLayout, f32)>) {
         let mut positions: Vec<math::Vec3> = Vec::new();
-        self.store.vertices.par_iter().map(|v| v.position).collect_into_vec(&mut positions);
-        self.grid.build(&positions, radius);
         let vertices = &self.store.vertices;
+        let order = groups.map(|(layout, merge_paths)| {
+            let (order, starts) = layout.order_by_group(&self.store.path_ends);
+            self.merge_groups.clear();
+            self.merge_groups.extend(layout.sizes().iter().enumerate().map(|(g, &size)| MergeGroup {
+                first: starts[g],
+                end: starts[g + 1],
+                normalization_scale: if size > 0 { merge_paths / size as f32 } else { 0.0 },
+            }));
+            order
+        });
+        match &order {
+            None => vertices.par_iter().map(|v| v.position).collect_into_vec(&mut positions),
+            Some(order) => order.par_iter().map(|&i| vertices[i as usize].position).collect_into_vec(&mut positions),
+        }
+        self.grid.build(&positions, radius);
+        let order = order.as_deref();
         self.grid
             .sorted_indices()
             .par_iter()
-            .map(|&i| MergeVertex::from(&vertices[i as usize]))
+            .map(|&i| MergeVertex::from(&vertices[order.map_or(i, |o| o[i as usize]) as usize]))
             .collect_into_vec(&mut self.merge_vertices);
     }
 }
