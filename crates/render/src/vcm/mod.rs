@@ -558,23 +558,14 @@ impl<S: SpectralMode> Engine<S> {
                 let (x, y) = ((index % width) as u32, (index / width) as u32);
                 let light_path = store.path(index);
                 let wavelengths = sets.get(seed, iteration, index as u64);
-                let merge = match groups {
+                let grouped = match groups {
                     (Some(layout), ranges) => {
                         merge_source.map(|s| MergeSource { group: Some(ranges[layout.group_of(index)]), ..s })
                     }
                     (None, _) => merge_source,
                 };
-                trace_camera_path_recorded(
-                    scene,
-                    it,
-                    x,
-                    y,
-                    &mut rng,
-                    light_path,
-                    merge.as_ref(),
-                    &wavelengths,
-                    techniques,
-                )
+                let merge = grouped.as_ref();
+                trace_camera_path_recorded(scene, it, x, y, &mut rng, light_path, merge, &wavelengths, techniques)
             });
         let camera_pass = start.elapsed() - light_pass - grid_build;
         let splats = chunks.iter().map(|c| c.2.len()).sum();
