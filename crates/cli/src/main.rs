@@ -92,7 +92,8 @@ struct RenderArgs {
     /// Rendering algorithm.
     #[arg(long, short, value_enum, default_value_t = AlgorithmName::Vcm)]
     algorithm: AlgorithmName,
-    /// Number of iterations, one sample per pixel each [default: 64].
+    /// Number of iterations, one sample per pixel each [default: the scene file's sample count,
+    /// else 64].
     #[arg(long, short, value_name = "N", conflicts_with = "time")]
     iterations: Option<u64>,
     /// Render for this many seconds of wall-clock time instead.

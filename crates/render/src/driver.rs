@@ -94,6 +94,9 @@ pub struct RenderSettings {
     pub russian_roulette: crate::path_tracer::RussianRoulette,
     /// MIS heuristic of the path tracer (`pt`).
     pub heuristic: crate::path_tracer::Heuristic,
+    /// Spectral mode with merging: wavelength groups per iteration
+    /// ([`crate::vcm::VcmSettings::wavelength_groups`]).
+    pub wavelength_groups: u32,
 }
 
 impl Default for RenderSettings {
@@ -112,6 +115,7 @@ impl Default for RenderSettings {
             spectral: false,
             russian_roulette: crate::path_tracer::RussianRoulette::default(),
             heuristic: crate::path_tracer::Heuristic::Balance,
+            wavelength_groups: crate::vcm::wavelengths::DEFAULT_WAVELENGTH_GROUPS,
         }
     }
 }
@@ -128,6 +132,7 @@ impl RenderSettings {
                 radius_mode: self.radius_mode,
                 memory_efficient: self.memory_efficient,
                 spectral: self.spectral,
+                wavelength_groups: self.wavelength_groups,
             }),
             _ => None,
         }

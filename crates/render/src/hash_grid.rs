@@ -362,13 +362,34 @@ impl HashGrid {
         self.for_each_slot(query, radius_sq, visit);
     }
 
+    /// Like [`HashGrid::for_each_slot_within`], restricted to the points whose index (in the
+    /// slice given to [`HashGrid::build`]) lies in `indices`. A bucket lists its points in
+    /// increasing index order, so the range is found by two binary searches per bucket and
+    /// points outside it are never distance-tested: laying out the points of several groups
+    /// one group after another gives one grid that answers queries per group.
+    pub fn for_each_slot_within_indices(
+        &self,
+        query: Vec3,
+        radius: f32,
+        indices: std::ops::Range<u32>,
+        mut visit: impl FnMut(usize),
+    ) {
+        let radius_sq = (radius * radius).min(self.radius_sq);
+        self.for_each_bucket(query, |start, end| {
+            let bucket = &self.indices[start..end];
+            let first = bucket.partition_point(|&i| i < indices.start);
+            let last = first + bucket[first..].partition_point(|&i| i < indices.end);
+            self.visit_slice(start + first, start + last, query, radius_sq, &mut visit);
+        });
+    }
+
     /// Visits the slots of the points within `sqrt(radius_sq)` (at most the build radius).
     fn for_each_slot(&self, query: Vec3, radius_sq: f32, mut visit: impl FnMut(usize)) {
         self.for_each_bucket(query, |start, end| self.visit_slice(start, end, query, radius_sq, &mut visit));
     }
 
     /// Calls `visit(start, end)` with the slot range of every distinct bucket a query at
-    /// `query` must look at.
+    /// `query` must look at (each range lies within one bucket).
     fn for_each_bucket(&self, query: Vec3, mut visit: impl FnMut(usize, usize)) {
         if self.indices.is_empty() || !query.is_finite() {
             return;
@@ -387,8 +408,11 @@ impl HashGrid {
             cell_count *= u64::from(range.1 - range.0) + 1;
         }
         if cell_count > MAX_QUERY_CELLS as u64 {
-            // Only when float precision is exhausted (points spread over > ~10⁷ cells).
-            visit(0, self.indices.len());
+            // Only when float precision is exhausted (points spread over > ~10⁷ cells): every
+            // bucket, in slot order.
+            for bucket in self.starts.windows(2) {
+                visit(bucket[0] as usize, bucket[1] as usize);
+            }
             return;
         }
 
@@ -709,6 +733,42 @@ mod tests {
         let mut qs = queries(&grid, &points, radius, 9);
         qs.extend([Vec3::splat(4.0), Vec3::new(4.0, 3.95, 4.02)]);
         check_against_brute_force(&grid, &points, radius, &qs);
+    }
+
+    #[test]
+    fn index_range_queries_match_brute_force() {
+        // Points of several groups laid out group after group; a query per group sees exactly
+        // the points of its group within the radius (also through the scan-everything fallback
+        // of a huge spread, and with buckets shared by many cells).
+        let mut spread = uniform_points(1_500, 3, Vec3::ZERO, Vec3::ONE);
+        spread.extend(uniform_points(1_500, 4, Vec3::splat(1e7), Vec3::splat(1e7 + 8.0)));
+        spread.extend(uniform_points(500, 5, Vec3::splat(3.9), Vec3::splat(4.1)));
+        let cases = [
+            (clustered_points(5_000, 21), 0.01, usize::MAX),
+            (spread, 0.05, usize::MAX),
+            (clustered_points(3_000, 22), 0.02, 16),
+        ];
+        for (points, radius, buckets) in cases {
+            let mut grid = HashGrid::with_bucket_limit(buckets);
+            grid.build(&points, radius);
+            let n = points.len() as u32;
+            let bounds = [0, n / 7, n / 2, n / 2, n - 3, n];
+            let mut found = 0;
+            for q in queries(&grid, &points, radius, 31) {
+                for range in bounds.windows(2).map(|b| b[0]..b[1]) {
+                    let mut got = Vec::new();
+                    grid.for_each_slot_within_indices(q, radius, range.clone(), |slot| {
+                        got.push(grid.sorted_indices()[slot] as usize);
+                    });
+                    got.sort_unstable();
+                    let expected: Vec<usize> =
+                        brute_force(&points, q, radius).into_iter().filter(|&i| range.contains(&(i as u32))).collect();
+                    assert_eq!(got, expected, "query {q}, indices {range:?}");
+                    found += got.len();
+                }
+            }
+            assert!(found > 100, "too few points found ({found})");
+        }
     }
 
     #[test]

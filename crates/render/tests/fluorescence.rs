@@ -198,15 +198,16 @@ const MERGING_RGB: [Run; 3] = [
     Run { algorithm: "bpm", resolution: 32, iterations: 1500, radius_factor: 3e-3 },
 ];
 
-// With merging on, every sub-path of an iteration shares the iteration's wavelengths (so that
-// any light vertex can meet any camera path): the spread of the iterations' image means is
-// then mostly wavelength noise, about 2.2 per iteration in the red channel of ppm (measured),
-// so a standard error of 2 % of the value needs about 13,000 iterations whatever the
-// resolution. Slow tier.
+// With merging on, the sub-paths of an iteration are split into K wavelength groups that merge
+// only within their group (`render::vcm::wavelengths`): the spread of the iterations' image
+// means is colour noise of 4K wavelengths plus the photon noise of N_L/K photons per merge.
+// With one set per iteration (K = 1, before the groups) it was about 2.2 per iteration in the
+// red channel of ppm at 32², whatever the resolution; with K = 4 ppm at 32² measured 2.8
+// (photon noise), so ppm and bpm run at 64². Slow tier.
 const MERGING_SPECTRAL: [Run; 3] = [
     Run { algorithm: "vcm", resolution: 16, iterations: 14000, radius_factor: 3e-3 },
-    Run { algorithm: "ppm", resolution: 32, iterations: 14000, radius_factor: 3e-3 },
-    Run { algorithm: "bpm", resolution: 32, iterations: 14000, radius_factor: 3e-3 },
+    Run { algorithm: "ppm", resolution: 64, iterations: 6000, radius_factor: 3e-3 },
+    Run { algorithm: "bpm", resolution: 64, iterations: 6000, radius_factor: 3e-3 },
 ];
 
 /// Per-channel image means over iterations and their standard errors (the whole image as one

@@ -3,7 +3,8 @@
 //! recursive quantities (tech report eqs. 31–47) give every technique equal an explicit,
 //! non-recursive balance-heuristic evaluation of eq. (12) from per-vertex forward and reverse
 //! area pdfs, and the weights of all techniques that can produce a path sum to 1 — for `vcm`,
-//! `bpt` (merging disabled) and `bpm` (connections disabled).
+//! `bpt` (merging disabled) and `bpm` (connections disabled), also with K wavelength groups
+//! (N_L/K merges per camera vertex, N_L light-tracing samples).
 //!
 //! Path convention: vertices x0 (on the light, or a direction for infinite lights) … xk (the
 //! pinhole). Technique VC_s connects light vertex x_{s−1} to camera vertex x_s (s = 0: the
@@ -223,7 +224,9 @@ enum Technique {
 }
 
 impl Oracle {
-    fn new(path: &TestPath, k_const: &MisConstants, connect: bool, merge: bool) -> Oracle {
+    /// The techniques of `path`: `n_light` samples of light tracing (t = 1), one of every other
+    /// connection, `n_merge` merges per camera vertex with a disc of radius `radius`.
+    fn new(path: &TestPath, counts: &Counts, connect: bool, merge: bool) -> Oracle {
         let k = path.k();
         let (p0_trace, p0_connect, emission_pdf) = path.light_pdfs();
         // Light-direction (forward) area pdfs p→_i, i = 0…k−1.
@@ -250,8 +253,8 @@ impl Oracle {
             };
         }
         let connectable = |i: usize| !path.is_specular(i);
-        let n_light = k_const.light_path_count as f64;
-        let area = (k_const.eta_vcm / k_const.light_path_count) as f64; // π r²
+        let n_light = counts.light as f64;
+        let area = std::f64::consts::PI * (counts.radius as f64).powi(2);
         let mut techniques = Vec::new();
         if connect {
             for s in 0..=k {
@@ -289,7 +292,7 @@ impl Oracle {
                     p *= r;
                 }
                 if p > 0.0 {
-                    techniques.push((Technique::Vm(j), n_light * p));
+                    techniques.push((Technique::Vm(j), counts.merge as f64 * p));
                 }
             }
         }
@@ -379,16 +382,35 @@ fn recursive_weight(path: &TestPath, technique: Technique, kc: &MisConstants, li
     }
 }
 
+/// Sample counts of the techniques, independent of the engine's constants.
+struct Counts {
+    /// Light sub-paths (samples of light tracing).
+    light: usize,
+    /// Light sub-paths a camera vertex merges with.
+    merge: usize,
+    /// Merging radius.
+    radius: f32,
+}
+
 fn check_mode(name: &str, connect: bool, merge: bool) {
-    check(name, connect, merge, 0.02);
+    check(name, connect, merge, 0.02, 1);
 }
 
 /// Checks the weights for camera paths of radius 0.02 with light sub-paths traced for
-/// `light_radius`.
-fn check(name: &str, connect: bool, merge: bool, light_radius: f32) {
+/// `light_radius`, 4096 light sub-paths in `groups` wavelength groups that merge only within
+/// their group (so 4096/groups merges per camera vertex, 4096 light-tracing samples).
+fn check(name: &str, connect: bool, merge: bool, light_radius: f32, groups: usize) {
     let mut rng = Rng::for_stream(2012, 0, 0);
-    let kc = MisConstants::new(4096, 0.02, connect, merge);
-    let light_k = MisConstants::new(4096, light_radius, connect, merge);
+    let counts = Counts { light: 4096, merge: 4096 / groups, radius: 0.02 };
+    let constants = |radius: f32| {
+        if groups == 1 {
+            MisConstants::new(4096, radius, connect, merge)
+        } else {
+            MisConstants::with_merge_paths(4096.0, (4096 / groups) as f32, radius, connect, merge)
+        }
+    };
+    let kc = constants(0.02);
+    let light_k = constants(light_radius);
     let lights = [LightKind::Area, LightKind::Point, LightKind::Directional, LightKind::Environment];
     let mut checked_paths = 0;
     let mut checked_weights = 0;
@@ -397,7 +419,7 @@ fn check(name: &str, connect: bool, merge: bool, light_radius: f32) {
         let k = 2 + trial % 5;
         let light = lights[(trial / 5) % 4];
         let Some(path) = TestPath::random(k, light, &mut rng) else { continue };
-        let oracle = Oracle::new(&path, &kc, connect, merge);
+        let oracle = Oracle::new(&path, &counts, connect, merge);
         if oracle.techniques.is_empty() {
             continue;
         }
@@ -441,8 +463,37 @@ fn bpm_weights_match_the_oracle() {
 fn rebased_light_vertices_give_the_weights_of_the_camera_paths_radius() {
     // Per-pixel radius (§6.1) and merging with the previous iteration's vertices (§6.2): the
     // light vertices' quantities, computed for another radius, are rebuilt from cVC and cVM.
-    check("vcm, light vertices traced for radius 0.05", true, true, 0.05);
-    check("bpm, light vertices traced for radius 0.007", false, true, 0.007);
+    check("vcm, light vertices traced for radius 0.05", true, true, 0.05, 1);
+    check("bpm, light vertices traced for radius 0.007", false, true, 0.007, 1);
+}
+
+#[test]
+fn wavelength_groups_merge_with_a_kth_of_the_light_paths() {
+    // Spectral mode splits an iteration into K wavelength groups that merge only within their
+    // group: merging has N_L/K samples per camera vertex, light tracing still N_L.
+    check("vcm, 16 groups", true, true, 0.02, 16);
+    check("bpm, 16 groups", false, true, 0.02, 16);
+    check("vcm, 4 groups, light vertices traced for radius 0.05", true, true, 0.05, 4);
+}
+
+#[test]
+fn the_oracle_tells_the_merge_count_from_the_light_tracing_count() {
+    // A deliberately wrong engine: 16 groups but N_L merges per camera vertex in the
+    // constants. Its weights must disagree with the oracle.
+    let mut rng = Rng::for_stream(2012, 0, 0);
+    let counts = Counts { light: 4096, merge: 256, radius: 0.02 };
+    let kc = MisConstants::new(4096, 0.02, true, true);
+    let mut worst = 0.0f64;
+    for trial in 0..400 {
+        let Some(path) = TestPath::random(2 + trial % 5, LightKind::Area, &mut rng) else { continue };
+        let oracle = Oracle::new(&path, &counts, true, true);
+        for &(technique, _) in &oracle.techniques {
+            let expected = oracle.weight(technique);
+            let got = recursive_weight(&path, technique, &kc, &kc) as f64;
+            worst = worst.max((got - expected).abs() / expected.max(1e-3));
+        }
+    }
+    assert!(worst > 0.1, "the oracle does not see a wrong merge count (worst relative error {worst})");
 }
 
 #[test]

@@ -127,6 +127,7 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
         spectral: r.spectral,
         russian_roulette: r.russian_roulette,
         heuristic: r.heuristic,
+        ..RenderSettings::default()
     };
     if let Some(vcm_settings) = settings.vcm_settings()
         && !settings.memory_efficient

@@ -89,3 +89,35 @@ fn a_resumed_session_continues_the_film_exactly() {
     assert_eq!(outcome.output.film.sums(), straight.output.film.sums(), "resumed film differs");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_scene_files_sample_count_is_the_default_budget() {
+    let dir = std::env::temp_dir().join(format!("vcm-session-samples-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("samples.xml");
+    std::fs::write(
+        &scene,
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="3"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film>
+    </sensor>
+    <shape type="sphere"><bsdf type="diffuse"/></shape>
+    <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+</scene>
+"#,
+    )
+    .unwrap();
+    let source = session::scene_source(scene.to_str().unwrap(), &[]).unwrap();
+    let render = |budget| {
+        let request =
+            Request { budget, algorithm: Algorithm::from_name("pt").unwrap(), ..Request::new(source.clone()) };
+        session::render(&request, None, &mut Collect::default()).unwrap().output.film.iterations()
+    };
+    // No budget given: the file's three samples per pixel; a given budget wins.
+    assert_eq!(render(None), 3);
+    assert_eq!(render(Some(Budget::Iterations(2))), 2);
+    std::fs::remove_dir_all(&dir).ok();
+}

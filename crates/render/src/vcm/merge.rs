@@ -40,6 +40,22 @@ pub struct MergeSource<'a, S: SpectralMode = Rgb> {
     pub vertices: MergeVertices<'a, S>,
     /// The range-search structure over them.
     pub grid: &'a HashGrid,
+    /// Merge only with the light vertices of this wavelength group (`None`: with all).
+    pub group: Option<MergeGroup>,
+}
+
+/// The light vertices of one wavelength group (spectral mode, `super::wavelengths`): those
+/// the grid was built with at indices `first..end`, and the factor that turns the kernel
+/// normalisation 1/(π r² N_VM) of the MIS constants into 1/(π r² n_g) for the group's exact
+/// number n_g of light sub-paths (N_VM is the average N_L/K).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MergeGroup {
+    /// First grid index of the group's vertices.
+    pub first: u32,
+    /// One past the last.
+    pub end: u32,
+    /// N_VM / n_g (dimensionless).
+    pub normalization_scale: f32,
 }
 
 /// The merged contribution at camera vertex `position` within `radius` (throughput and kernel
@@ -59,7 +75,7 @@ pub fn merge<S: SpectralMode, R: Record>(
     rng: &mut Rng,
     out: &mut R,
 ) -> S {
-    let args = (camera, end, source.grid, radius, max_length, weighting, k, wavelengths);
+    let args = (camera, end, source.grid, source.group, radius, max_length, weighting, k, wavelengths);
     match source.vertices {
         MergeVertices::Full(vertices) => merge_with(vertices, args, rng, out),
         MergeVertices::Compact(vertices) => merge_with(vertices, args, rng, out),
@@ -71,6 +87,7 @@ type MergeArgs<'a, 'b, S> = (
     &'a SubPath<S>,
     &'a CameraEnd<'b>,
     &'a HashGrid,
+    Option<MergeGroup>,
     f32,
     u32,
     MergeWeighting,
@@ -81,7 +98,7 @@ type MergeArgs<'a, 'b, S> = (
 /// [`merge`] over one kind of stored record.
 fn merge_with<S: SpectralMode, R: Record, V: MergeData<S>>(
     vertices: &[V],
-    (camera, end, grid, radius, max_length, weighting, k, wavelengths): MergeArgs<S>,
+    (camera, end, grid, group, radius, max_length, weighting, k, wavelengths): MergeArgs<S>,
     rng: &mut Rng,
     out: &mut R,
 ) -> S {
@@ -90,7 +107,11 @@ fn merge_with<S: SpectralMode, R: Record, V: MergeData<S>>(
     let label = end.fluorescent.map(|f| (f, f.sample_label::<S>(rng.uniform())));
     let continuation = bsdf.continuation_probability();
     let mut sum = S::default();
-    grid.for_each_slot_within(position, radius, |slot| {
+    let normalization = match group {
+        None => k.vm_normalization,
+        Some(group) => k.vm_normalization * group.normalization_scale,
+    };
+    let visit = |slot: usize| {
         let light = &vertices[slot];
         // A merged path is one segment shorter than a connected one.
         if light.path_length() + camera.path_length > max_length {
@@ -117,9 +138,13 @@ fn merge_with<S: SpectralMode, R: Record, V: MergeData<S>>(
         sum += part;
         if R::PER_TECHNIQUE {
             let t = camera.path_length + 1;
-            let value = camera.throughput * view(&camera.slots, part) * k.vm_normalization;
+            let value = camera.throughput * view(&camera.slots, part) * normalization;
             out.stage_merge(light.path_length() + 1, t, value.to_rgb(wavelengths));
         }
-    });
-    camera.throughput * view(&camera.slots, sum) * k.vm_normalization
+    };
+    match group {
+        None => grid.for_each_slot_within(position, radius, visit),
+        Some(g) => grid.for_each_slot_within_indices(position, radius, g.first..g.end, visit),
+    }
+    camera.throughput * view(&camera.slots, sum) * normalization
 }

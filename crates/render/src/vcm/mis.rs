@@ -10,33 +10,55 @@
 use math::PI;
 
 /// Constants of one iteration (eq. 20 and the normalisation of the merging kernel).
+///
+/// Two sample counts enter: N_L, the number of light sub-paths, is the number of samples of
+/// light tracing (t = 1: every light sub-path may splat into every pixel); N_VM, the number of
+/// light sub-paths a camera vertex merges with, is N_L, or N_L/K when the sub-paths of an
+/// iteration are split into K wavelength groups that merge only within their group (spectral
+/// mode, `super::wavelengths`). Connections have one sample (the pixel's own light sub-path).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MisConstants {
-    /// η_VCM = n_VM/n_VC · π r² with n_VC = 1 and n_VM = the number of light sub-paths (eq. 20).
+    /// η_VCM = n_VM/n_VC · π r² with n_VC = 1 and n_VM = N_VM (eq. 20), in units of area.
     pub eta_vcm: f32,
     /// η_VCM when merging is enabled, else 0: the weight of the merging techniques relative to
     /// connections.
     pub vm_weight: f32,
     /// 1/η_VCM when connecting is enabled, else 0.
     pub vc_weight: f32,
-    /// 1/(π r² N_L): the merging kernel normalisation (a disc of radius r, N_L light paths).
+    /// 1/(π r² N_VM): the merging kernel normalisation (a disc of radius r, N_VM light paths).
     pub vm_normalization: f32,
     /// N_L, the number of light sub-paths (and of samples of the t = 1 technique).
     pub light_path_count: f32,
+    /// N_VM, the number of light sub-paths a camera vertex merges with (N_L/K with K wavelength
+    /// groups).
+    pub merge_path_count: f32,
 }
 
 impl MisConstants {
-    /// Constants for `light_path_count` light sub-paths, merging radius `radius` and the
-    /// enabled technique families.
+    /// Constants for `light_path_count` light sub-paths that all merge with every camera
+    /// vertex, merging radius `radius` and the enabled technique families.
     pub fn new(light_path_count: usize, radius: f32, connect: bool, merge: bool) -> Self {
-        let light_path_count = light_path_count as f32;
-        let eta_vcm = PI * radius * radius * light_path_count; // [tech. rep. eq. 20]
+        let n = light_path_count as f32;
+        Self::with_merge_paths(n, n, radius, connect, merge)
+    }
+
+    /// Constants for `light_path_count` light sub-paths of which `merge_path_count` (on
+    /// average) merge with a camera vertex (N_L/K with K wavelength groups).
+    pub fn with_merge_paths(
+        light_path_count: f32,
+        merge_path_count: f32,
+        radius: f32,
+        connect: bool,
+        merge: bool,
+    ) -> Self {
+        let eta_vcm = PI * radius * radius * merge_path_count; // [tech. rep. eq. 20]
         Self {
             eta_vcm,
             vm_weight: if merge { eta_vcm } else { 0.0 },
             vc_weight: if connect { 1.0 / eta_vcm } else { 0.0 },
             vm_normalization: 1.0 / eta_vcm,
             light_path_count,
+            merge_path_count,
         }
     }
 }

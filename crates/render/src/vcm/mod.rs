@@ -24,10 +24,10 @@
 //!
 //! **Spectral mode.** The passes are generic over [`SpectralMode`]; [`VcmEngine`] picks
 //! [`Rgb`] or [`Hero4`] once, from [`VcmSettings::spectral`]. Sub-paths that meet must carry
-//! the same wavelengths: with merging on, every sub-path of an iteration uses the iteration's
-//! set (any light vertex may meet any camera path); without merging, light sub-path `i` and
-//! camera path `i` (the only pair that is connected) share the set of index `i`, so that the
-//! image sees many wavelengths per iteration. Light tracing splats and camera paths convert
+//! the same wavelengths ([`wavelengths`]): without merging, light sub-path `i` and camera
+//! path `i` (the only pair that is connected) share the set of index `i`; with merging, the
+//! sub-paths are split into wavelength groups with a set each, and a camera vertex merges only
+//! with the light vertices of its group. Light tracing splats and camera paths convert
 //! their estimates to linear sRGB as they are made ([`SpectralMode::to_rgb`]), so the film, the
 //! technique images and the NaN counting are the same in both modes.
 //!
@@ -44,6 +44,7 @@ pub mod merge;
 pub mod mis;
 pub mod subpath;
 pub mod technique_images;
+pub mod wavelengths;
 
 use math::{Rng, Vec2};
 use rayon::prelude::*;
@@ -55,9 +56,10 @@ use camera_pass::trace_camera_path_recorded;
 use connect::{Splat, SplatTarget};
 use light_pass::trace_light_path;
 use light_vertex::{LightPath, LightVertex, LightVertexStore, MergeData, MergeRecord};
-use merge::{MergeSource, MergeVertices};
+use merge::{MergeGroup, MergeSource, MergeVertices};
 use mis::MisConstants;
 use technique_images::{TechniqueFrame, TechniqueLayout, TechniqueValues};
+use wavelengths::{DEFAULT_WAVELENGTH_GROUPS, WavelengthSource};
 
 /// The algorithms of the VCM engine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -219,10 +221,14 @@ pub struct VcmSettings {
     pub memory_efficient: bool,
     /// Spectral mode: four hero-rotated wavelengths per path ([`Hero4`]) instead of RGB.
     pub spectral: bool,
+    /// Spectral mode with merging (two-stage mode): the number K of wavelength groups per
+    /// iteration ([`wavelengths`]); 1 is one set for the whole iteration. Ignored otherwise.
+    pub wavelength_groups: u32,
 }
 
 impl VcmSettings {
-    /// Defaults: radius factor 0.003, α = 0.75, 10 segments, global radius, two-stage mode.
+    /// Defaults: radius factor 0.003, α = 0.75, 10 segments, global radius, two-stage mode,
+    /// [`DEFAULT_WAVELENGTH_GROUPS`] wavelength groups.
     pub fn new(algorithm: VcmAlgorithm) -> Self {
         Self {
             algorithm,
@@ -232,6 +238,7 @@ impl VcmSettings {
             radius_mode: RadiusMode::Global,
             memory_efficient: false,
             spectral: false,
+            wavelength_groups: DEFAULT_WAVELENGTH_GROUPS,
         }
     }
 }
@@ -263,8 +270,9 @@ impl Iteration<'_> {
     pub fn pixel_constants(&self, pixel: usize) -> MisConstants {
         match self.pixel_radii {
             None => self.constants,
-            Some(r) => MisConstants::new(
-                self.constants.light_path_count as usize,
+            Some(r) => MisConstants::with_merge_paths(
+                self.constants.light_path_count,
+                self.constants.merge_path_count,
                 r[pixel],
                 self.techniques.connect,
                 self.techniques.merge,
@@ -317,49 +325,6 @@ const LIGHT_CHUNK: usize = 1024;
 
 /// Offset that separates the random streams of light sub-paths from those of camera paths.
 const LIGHT_STREAM: u64 = 1 << 62;
-
-/// Offset of the random streams that draw wavelengths (spectral mode only, so RGB renders draw
-/// exactly the numbers they drew before spectral mode existed).
-const WAVELENGTH_STREAM: u64 = 1 << 61;
-
-/// Stream index of the wavelengths shared by all sub-paths of an iteration (merging on).
-const SHARED_WAVELENGTHS: u64 = (1 << 61) - 1;
-
-/// Where the sub-paths of one iteration get their wavelengths: one set for the whole iteration
-/// (`shared`, merging on), or one per light/camera sub-path pair. `paired` (the scene has
-/// fluorescence, see [`spectrum::Wavelengths4::paired`]) is decided once per iteration.
-struct WavelengthSource<S: SpectralMode> {
-    shared: Option<S::Wavelengths>,
-    paired: bool,
-}
-
-impl<S: SpectralMode> WavelengthSource<S> {
-    /// The source of iteration `iteration` of `scene`; shared when `merge`.
-    fn new(scene: &Scene, seed: u64, iteration: u64, merge: bool) -> Self {
-        let mut source = Self { shared: None, paired: scene.has_fluorescence() };
-        if merge {
-            source.shared = Some(source.draw(seed, iteration, SHARED_WAVELENGTHS));
-        }
-        source
-    }
-
-    /// Draws the set of stream `index` (two numbers of its own stream).
-    #[inline]
-    fn draw(&self, seed: u64, iteration: u64, index: u64) -> S::Wavelengths {
-        let mut rng = Rng::for_stream(seed, iteration, WAVELENGTH_STREAM | index);
-        let (u, v) = (rng.uniform(), rng.uniform());
-        S::sample_wavelengths(u, v, self.paired)
-    }
-
-    /// The wavelengths of sub-path pair `index` of `iteration`, or the iteration's shared set.
-    #[inline]
-    fn get(&self, seed: u64, iteration: u64, index: u64) -> S::Wavelengths {
-        match &self.shared {
-            Some(w) => *w,
-            None => self.draw(seed, iteration, index),
-        }
-    }
-}
 
 /// The engine and its buffers (kept across iterations), in RGB or spectral mode.
 pub struct VcmEngine {
@@ -462,6 +427,8 @@ struct Engine<S: SpectralMode> {
     /// Per-pixel contributions by (s, t) technique of the last iteration, when requested.
     technique_frame: Option<TechniqueFrame>,
     stats: IterationStats,
+    /// The wavelength groups' ranges in the grid (spectral mode with merging; else empty).
+    merge_groups: Vec<MergeGroup>,
 }
 
 /// One chunk of light sub-paths: vertices, per-path ends (relative), splats.
@@ -489,6 +456,7 @@ impl<S: SpectralMode> Engine<S> {
             family_frames: None,
             technique_frame: None,
             stats: IterationStats::default(),
+            merge_groups: Vec::new(),
         }
     }
 
@@ -514,14 +482,26 @@ impl<S: SpectralMode> Engine<S> {
             // The grid must cover the largest per-pixel radius.
             radius = pixel_radii.iter().fold(0.0f32, |a, b| a.max(*b));
         }
+        // Wavelength groups: spectral mode with merging (both modes merge within the iteration).
+        let grouped = self.settings.spectral && techniques.merge;
+        let groups = if grouped { self.settings.wavelength_groups.max(1) } else { 1 };
+        let light_paths = pixel_count as f32;
+        let merge_paths = if groups > 1 { light_paths / groups as f32 } else { light_paths };
         let it = Iteration {
-            constants: MisConstants::new(pixel_count, radius, techniques.connect, techniques.merge),
+            constants: MisConstants::with_merge_paths(
+                light_paths,
+                merge_paths,
+                radius,
+                techniques.connect,
+                techniques.merge,
+            ),
             max_length: self.settings.max_length,
             radius,
             pixel_radii: self.pixel_footprints.as_ref().map(|_| pixel_radii.as_slice()),
             techniques,
         };
-        let sets = WavelengthSource::<S>::new(scene, seed, iteration, techniques.merge);
+        let width = frame.width as usize;
+        let sets = WavelengthSource::<S>::new(scene, seed, iteration, techniques.merge, groups, width, pixel_count);
         let (rejected, splats) = if self.settings.memory_efficient && !techniques.light_trace_only {
             self.run_single_stage(scene, seed, iteration, &it, frame, &sets)
         } else {
@@ -551,11 +531,21 @@ impl<S: SpectralMode> Engine<S> {
         let splat_chunks = trace_light_pass(scene, seed, iteration, it, pixel_count, sets, &mut self.store);
         let light_pass = start.elapsed();
         if it.techniques.merge {
-            index_for_merging(&mut self.store, &mut self.grid, it.radius);
+            let groups = sets.groups().map(|g| (g, it.constants.merge_path_count));
+            let order = build_grid(
+                &self.store.vertices,
+                &self.store.path_ends,
+                groups,
+                &mut self.grid,
+                it.radius,
+                &mut self.merge_groups,
+            );
+            self.store.permute_to_slots(&order);
         }
         let grid_build = start.elapsed() - light_pass;
         let store = &self.store;
-        let source = MergeSource { vertices: MergeVertices::Full(&self.store.vertices), grid: &self.grid };
+        let groups = (sets.groups(), self.merge_groups.as_slice());
+        let source = MergeSource { vertices: MergeVertices::Full(&self.store.vertices), grid: &self.grid, group: None };
         let merge_source = it.techniques.merge.then_some(source);
         let width = frame.width as usize;
         let mut rejected =
@@ -567,7 +557,13 @@ impl<S: SpectralMode> Engine<S> {
                 let (x, y) = ((index % width) as u32, (index / width) as u32);
                 let light_path = store.path(index);
                 let wavelengths = sets.get(seed, iteration, index as u64);
-                let merge = merge_source.as_ref();
+                let grouped = match groups {
+                    (Some(layout), ranges) => {
+                        merge_source.map(|s| MergeSource { group: Some(ranges[layout.group_of(index)]), ..s })
+                    }
+                    (None, _) => merge_source,
+                };
+                let merge = grouped.as_ref();
                 trace_camera_path_recorded(scene, it, x, y, &mut rng, light_path, merge, &wavelengths, techniques)
             });
         let camera_pass = start.elapsed() - light_pass - grid_build;
@@ -606,13 +602,12 @@ impl<S: SpectralMode> Engine<S> {
         if it.techniques.merge {
             // The first trace stores vertices and connects nothing to the camera.
             let merging_only = Iteration { techniques: Techniques { connect: false, ..it.techniques }, ..*it };
-            trace_merge_records(scene, seed, iteration, &merging_only, pixel_count, sets, &mut self.records);
-            let mut positions: Vec<math::Vec3> = Vec::new();
-            self.records.par_iter().map(MergeData::position).collect_into_vec(&mut positions);
-            self.grid.build(&positions, it.radius);
-            drop(positions);
+            let ends = trace_merge_records(scene, seed, iteration, &merging_only, pixel_count, sets, &mut self.records);
+            let groups = sets.groups().map(|g| (g, it.constants.merge_path_count));
+            let order = build_grid(&self.records, &ends, groups, &mut self.grid, it.radius, &mut self.merge_groups);
+            drop(ends);
             let mut slots = Vec::new();
-            light_vertex::slot_map(self.records.len(), self.grid.sorted_indices(), &mut slots);
+            light_vertex::slot_map(self.records.len(), &order, &mut slots);
             light_vertex::permute(&mut self.records, &slots);
         } else {
             self.records.clear();
@@ -621,7 +616,8 @@ impl<S: SpectralMode> Engine<S> {
         // Every row traces its pixels' light sub-paths and camera paths; rows return their
         // splats, per-pixel family values and rejected counts.
         let width = frame.width as usize;
-        let source = MergeSource { vertices: MergeVertices::Compact(&self.records), grid: &self.grid };
+        let source = MergeSource { vertices: MergeVertices::Compact(&self.records), grid: &self.grid, group: None };
+        let groups = (sets.groups(), self.merge_groups.as_slice());
         let merge_source = it.techniques.merge.then_some(source);
         let family_frames = self.family_frames.as_mut();
         let record_families = family_frames.is_some();
@@ -659,6 +655,12 @@ impl<S: SpectralMode> Engine<S> {
                         let pixel_images = &mut technique_row[column * images..(column + 1) * images];
                         TechniqueValues::new(layout, pixel_images, &mut stage)
                     });
+                    let merge = match groups {
+                        (Some(layout), ranges) => {
+                            merge_source.map(|s| MergeSource { group: Some(ranges[layout.group_of(index)]), ..s })
+                        }
+                        (None, _) => merge_source,
+                    };
                     let mut values = trace_camera_path_recorded(
                         scene,
                         it,
@@ -666,7 +668,7 @@ impl<S: SpectralMode> Engine<S> {
                         row as u32,
                         &mut rng,
                         light_path,
-                        merge_source.as_ref(),
+                        merge.as_ref(),
                         &wavelengths,
                         techniques,
                     );
@@ -709,14 +711,36 @@ impl<S: SpectralMode> Engine<S> {
     }
 }
 
-/// Builds `grid` over the vertices of `store` for queries of radius `radius` and moves the
-/// vertices into the grid's slot order (in place; see [`LightVertexStore::permute_to_slots`]).
-fn index_for_merging<S: SpectralMode>(store: &mut LightVertexStore<S>, grid: &mut HashGrid, radius: f32) {
+/// Builds `grid` over `items` (light vertices of sub-paths ending at `path_ends`, in path order)
+/// for queries of radius `radius` and returns the grid order: `order[s]` is the item that
+/// belongs in slot `s` (the caller permutes the items so). With wavelength groups (their layout
+/// and the merge path count N_VM) the items enter the grid group after group and
+/// `merge_groups` gets each group's range of grid indices; otherwise it is emptied.
+fn build_grid<V: MergeData<S>, S: SpectralMode>(
+    items: &[V],
+    path_ends: &[u32],
+    groups: Option<(&wavelengths::GroupLayout, f32)>,
+    grid: &mut HashGrid,
+    radius: f32,
+    merge_groups: &mut Vec<MergeGroup>,
+) -> Vec<u32> {
+    merge_groups.clear();
     let mut positions: Vec<math::Vec3> = Vec::new();
-    store.vertices.par_iter().map(|v| v.position).collect_into_vec(&mut positions);
+    let Some((layout, merge_paths)) = groups else {
+        items.par_iter().map(MergeData::position).collect_into_vec(&mut positions);
+        grid.build(&positions, radius);
+        return grid.sorted_indices().to_vec();
+    };
+    let (order, starts) = layout.order_by_group(path_ends);
+    merge_groups.extend(layout.sizes().iter().enumerate().map(|(g, &size)| MergeGroup {
+        first: starts[g],
+        end: starts[g + 1],
+        normalization_scale: if size > 0 { merge_paths / size as f32 } else { 0.0 },
+    }));
+    order.par_iter().map(|&i| items[i as usize].position()).collect_into_vec(&mut positions);
     grid.build(&positions, radius);
-    drop(positions);
-    store.permute_to_slots(grid.sorted_indices());
+    // Grid indices count in group order; the items are in path order.
+    grid.sorted_indices().iter().map(|&j| order[j as usize]).collect()
 }
 
 /// Light sub-paths traced per batch of the light pass: the vertices of one batch are moved into
@@ -750,7 +774,8 @@ fn trace_light_pass<S: SpectralMode>(
 }
 
 /// Traces the `pixel_count` light sub-paths of `iteration` in parallel chunks and replaces
-/// `records` with the merging-only records of their vertices, in path order.
+/// `records` with the merging-only records of their vertices, in path order; returns each
+/// sub-path's end index.
 fn trace_merge_records<S: SpectralMode>(
     scene: &Scene,
     seed: u64,
@@ -759,14 +784,18 @@ fn trace_merge_records<S: SpectralMode>(
     pixel_count: usize,
     sets: &WavelengthSource<S>,
     records: &mut Vec<MergeRecord<S>>,
-) {
+) -> Vec<u32> {
     records.clear();
+    let mut path_ends = Vec::with_capacity(pixel_count);
     for batch in (0..pixel_count).step_by(LIGHT_BATCH) {
         let paths = batch..(batch + LIGHT_BATCH).min(pixel_count);
-        for (vertices, _, _) in trace_light_chunks(scene, seed, iteration, it, paths, sets) {
+        for (vertices, ends, _) in trace_light_chunks(scene, seed, iteration, it, paths, sets) {
+            let base = records.len() as u32;
             records.extend(vertices.iter().map(MergeRecord::from));
+            path_ends.extend(ends.iter().map(|e| e + base));
         }
     }
+    path_ends
 }
 
 /// Traces the light sub-paths `paths` of `iteration` in parallel chunks, in order.

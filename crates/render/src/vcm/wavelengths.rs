@@ -1,0 +1,274 @@
+//! Where the sub-paths of one iteration get their wavelengths (spectral mode; RGB mode draws
+//! nothing that reaches the image).
+//!
+//! Sub-paths that meet must carry the same wavelengths:
+//!
+//! - **without merging** (`lt`, `bpt`) light sub-path `i` and camera path `i`, the only pair
+//!   that is connected, share the set of index `i`;
+//! - **with merging** (`ppm`, `bpm`, `vcm`) the sub-paths are split into `K` *wavelength
+//!   groups* ([`GroupLayout`]): pixel `i` and light sub-path `i` belong to group `g(i)`, every
+//!   group has its own set, and a camera vertex merges only with the light vertices of its
+//!   group. The `4K` wavelengths of an iteration are equally spaced in primary sample space
+//!   (one random offset), so the colour of the image mean is stratified over `4K` wavelengths
+//!   instead of seeing 4 per iteration. `K = 1` is one set for the whole iteration.
+//!
+//! **The sets.** Without fluorescence the set of group `k` has the primary samples
+//! `(k + ξ)/(4K) + (h_k + j)/4`, `j = 0…3`, with one `ξ` per iteration and the hero's quarter
+//! `h_k ∈ {0…3}` drawn per group (so the hero, which alone survives a dispersive event, is not
+//! always the shortest wavelength of its set). With fluorescence (paired sets, see
+//! [`spectrum::Wavelengths4`]) the two pairs start at `u_k = (k + ξ)/(2K) + h_k/2` and
+//! `v_k = (π(k) + ξ')/(2K) + h'_k/2`, `π` a random permutation: both pairs are stratified and,
+//! for a pixel whose group is uniformly random, `u` and `v` are independent and uniform.
+//!
+//! **The assignment.** Index `i = y·W + x` (a pixel, or the light sub-path of the same index)
+//! has the class `(x + a·y + o) mod K`, a sheared lattice (`a ≈ √K`, so each class is spread
+//! evenly over the image, about `√K` pixels apart), and the group `σ(class)`; `o` and the
+//! permutation `σ` are drawn per iteration. Every pixel's group is then uniformly distributed,
+//! so its wavelengths have the density of the single-set sampler: each technique stays
+//! unbiased. The MIS counts (`super::mis::MisConstants`): light tracing still has N_L samples
+//! per pixel (every light sub-path splats with its own wavelengths), merging N_L/K.
+
+use math::Rng;
+use scene::Scene;
+use spectrum::SpectralMode;
+
+/// Offset of the random streams that draw wavelengths (spectral mode only, so RGB renders draw
+/// exactly the numbers they drew before spectral mode existed).
+const WAVELENGTH_STREAM: u64 = 1 << 61;
+
+/// Stream index of the per-iteration numbers of the merging algorithms (the shared set, or the
+/// groups' offsets and permutations).
+const SHARED_WAVELENGTHS: u64 = (1 << 61) - 1;
+
+/// Wavelength groups per iteration of the merging algorithms in spectral mode (chosen by
+/// measurement, `docs/spectral.md`).
+pub const DEFAULT_WAVELENGTH_GROUPS: u32 = 4;
+
+/// Which group each light sub-path and pixel of an iteration belongs to, and how many there
+/// are in each group.
+#[derive(Clone, Debug)]
+pub struct GroupLayout {
+    width: usize,
+    shear: usize,
+    offset: usize,
+    /// Group of each lattice class (`σ`).
+    class_group: Vec<u32>,
+    /// Number of indices `0..count` in each group.
+    sizes: Vec<u32>,
+}
+
+impl GroupLayout {
+    /// The layout of `groups` groups over indices `0..count` of an image `width` pixels wide,
+    /// with the per-iteration offset and permutation drawn from `rng`.
+    fn new(groups: usize, width: usize, count: usize, rng: &mut Rng) -> Self {
+        let groups = groups.max(1);
+        let shear = ((groups as f64).sqrt().round() as usize).max(1);
+        let offset = (rng.next_u32() as usize) % groups;
+        let class_group = permutation(groups, rng);
+        let mut layout = Self { width: width.max(1), shear, offset, class_group, sizes: vec![0; groups] };
+        for index in 0..count {
+            let g = layout.group_of(index);
+            layout.sizes[g] += 1;
+        }
+        layout
+    }
+
+    /// Number of groups.
+    pub fn count(&self) -> usize {
+        self.class_group.len()
+    }
+
+    /// The group of pixel (and light sub-path) `index`.
+    #[inline]
+    pub fn group_of(&self, index: usize) -> usize {
+        let (x, y) = (index % self.width, index / self.width);
+        let class = (x + (self.shear * y) % self.count() + self.offset) % self.count();
+        self.class_group[class] as usize
+    }
+
+    /// Number of light sub-paths (and pixels) in each group.
+    pub fn sizes(&self) -> &[u32] {
+        &self.sizes
+    }
+
+    /// The light vertices of sub-paths whose vertices end at `path_ends` (cumulative) reordered
+    /// group after group (stable within a group): their indices, and the `K + 1` offsets of
+    /// the groups in that order.
+    pub fn order_by_group(&self, path_ends: &[u32]) -> (Vec<u32>, Vec<u32>) {
+        let mut starts = vec![0u32; self.count() + 1];
+        let mut begin = 0;
+        for (path, &end) in path_ends.iter().enumerate() {
+            starts[self.group_of(path) + 1] += end - begin;
+            begin = end;
+        }
+        for g in 0..self.count() {
+            starts[g + 1] += starts[g];
+        }
+        let mut cursor = starts.clone();
+        let mut order = vec![0u32; begin as usize];
+        let mut begin = 0;
+        for (path, &end) in path_ends.iter().enumerate() {
+            let g = self.group_of(path);
+            for vertex in begin..end {
+                order[cursor[g] as usize] = vertex;
+                cursor[g] += 1;
+            }
+            begin = end;
+        }
+        (order, starts)
+    }
+}
+
+/// A uniformly random permutation of `0..n` (Fisher–Yates).
+fn permutation(n: usize, rng: &mut Rng) -> Vec<u32> {
+    let mut p: Vec<u32> = (0..n as u32).collect();
+    for i in (1..n).rev() {
+        let j = (rng.next_u32() as usize) % (i + 1);
+        p.swap(i, j);
+    }
+    p
+}
+
+/// How the sets of one iteration are chosen.
+enum Sets<W> {
+    /// One per light/camera sub-path pair (no merging).
+    PerPair,
+    /// One for the whole iteration (`K = 1`).
+    Shared(W),
+    /// One per wavelength group.
+    Grouped(GroupLayout, Vec<W>),
+}
+
+/// Where the sub-paths of one iteration get their wavelengths. `paired` (the scene has
+/// fluorescence, see [`spectrum::Wavelengths4::paired`]) is decided once per iteration.
+pub(super) struct WavelengthSource<S: SpectralMode> {
+    sets: Sets<S::Wavelengths>,
+    paired: bool,
+}
+
+impl<S: SpectralMode> WavelengthSource<S> {
+    /// The source of iteration `iteration` of `scene`: per pair without merging, else `groups`
+    /// groups over `count` indices of an image `width` pixels wide (one shared set for 1).
+    pub(super) fn new(
+        scene: &Scene,
+        seed: u64,
+        iteration: u64,
+        merge: bool,
+        groups: u32,
+        width: usize,
+        count: usize,
+    ) -> Self {
+        let paired = scene.has_fluorescence();
+        let mut source = Self { sets: Sets::PerPair, paired };
+        if merge && groups <= 1 {
+            source.sets = Sets::Shared(source.draw(seed, iteration, SHARED_WAVELENGTHS));
+        } else if merge {
+            let mut rng = Rng::for_stream(seed, iteration, WAVELENGTH_STREAM | SHARED_WAVELENGTHS);
+            let k = groups as usize;
+            let layout = GroupLayout::new(k, width, count, &mut rng);
+            let (xi, xi_v) = (rng.uniform(), rng.uniform());
+            let partner = permutation(k, &mut rng);
+            let sets = (0..k)
+                .map(|g| {
+                    let (h, h_v) = (rng.next_u32() % 4, rng.next_u32() % 4);
+                    let (u, v) = if paired {
+                        let start = |stratum: usize, xi: f32, half: u32| {
+                            (stratum as f32 + xi) / (2 * k) as f32 + 0.5 * (half % 2) as f32
+                        };
+                        (start(g, xi, h), start(partner[g] as usize, xi_v, h_v))
+                    } else {
+                        ((g as f32 + xi) / (4 * k) as f32 + 0.25 * h as f32, 0.0)
+                    };
+                    S::sample_wavelengths(u.min(ONE_MINUS), v.min(ONE_MINUS), paired)
+                })
+                .collect();
+            source.sets = Sets::Grouped(layout, sets);
+        }
+        source
+    }
+
+    /// Draws the set of stream `index` (two numbers of its own stream).
+    #[inline]
+    fn draw(&self, seed: u64, iteration: u64, index: u64) -> S::Wavelengths {
+        let mut rng = Rng::for_stream(seed, iteration, WAVELENGTH_STREAM | index);
+        let (u, v) = (rng.uniform(), rng.uniform());
+        S::sample_wavelengths(u, v, self.paired)
+    }
+
+    /// The wavelengths of sub-path pair `index` of `iteration`: its own set, its group's, or
+    /// the iteration's shared set.
+    #[inline]
+    pub(super) fn get(&self, seed: u64, iteration: u64, index: u64) -> S::Wavelengths {
+        match &self.sets {
+            Sets::PerPair => self.draw(seed, iteration, index),
+            Sets::Shared(w) => *w,
+            Sets::Grouped(layout, sets) => sets[layout.group_of(index as usize)],
+        }
+    }
+
+    /// The wavelength groups, when the iteration has more than one.
+    pub(super) fn groups(&self) -> Option<&GroupLayout> {
+        match &self.sets {
+            Sets::Grouped(layout, _) => Some(layout),
+            _ => None,
+        }
+    }
+}
+
+/// The largest `f32` below 1 (a primary sample must stay in [0, 1)).
+const ONE_MINUS: f32 = 1.0 - f32::EPSILON / 2.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn groups_partition_the_image_evenly() {
+        let mut rng = Rng::for_stream(3, 0, 0);
+        for (groups, width, height) in [(16, 64, 64), (16, 37, 23), (4, 8, 8), (64, 512, 512), (1, 5, 5)] {
+            let layout = GroupLayout::new(groups, width, width * height, &mut rng);
+            let sizes = layout.sizes();
+            let (min, max) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+            assert_eq!(sizes.iter().sum::<u32>() as usize, width * height);
+            // Each image row holds every class at most ⌈W/K⌉ times: sizes differ by a few rows.
+            assert!(max - min <= height as u32, "{groups} groups on {width}×{height}: {sizes:?}");
+            if width % groups == 0 {
+                assert_eq!(min, max, "{groups} groups on {width}×{height}: {sizes:?}");
+            }
+            // Every K×K block of pixels (K ≤ 16) holds every group K times.
+            if groups <= 16 && width >= groups && height >= groups {
+                let mut count = vec![0; groups];
+                for y in 0..groups {
+                    for x in 0..groups {
+                        count[layout.group_of(y * width + x)] += 1;
+                    }
+                }
+                assert!(count.iter().all(|&c| c == groups), "{groups} groups on {width}×{height}: {count:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn vertices_are_ordered_group_after_group() {
+        let mut rng = Rng::for_stream(4, 0, 0);
+        let layout = GroupLayout::new(4, 5, 20, &mut rng);
+        // Path p has p % 3 vertices.
+        let mut ends = Vec::new();
+        let mut total = 0;
+        for p in 0..20u32 {
+            total += p % 3;
+            ends.push(total);
+        }
+        let (order, starts) = layout.order_by_group(&ends);
+        assert_eq!(order.len(), total as usize);
+        let path_of = |v: u32| ends.iter().position(|&e| v < e).unwrap();
+        for g in 0..4 {
+            let members = &order[starts[g] as usize..starts[g + 1] as usize];
+            assert!(members.windows(2).all(|w| w[0] < w[1]));
+            assert!(members.iter().all(|&v| layout.group_of(path_of(v)) == g));
+        }
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..total).collect::<Vec<_>>());
+    }
+}
