@@ -169,7 +169,8 @@ def memory_table(rows, commands):
     out = [
         stamp(commands),
         "Peak RSS: the whole process (`VmHWM`, one process per configuration), so it includes the "
-        "scene, the film and the binary; the guard estimates only the light vertices and the merging grid.",
+        "scene, the film and the binary; the guard's estimate (docs/memory.md) is the resident memory after "
+        "loading plus the render's buffers (film, splats, light vertices, grid), made before rendering.",
         "",
         "| algorithm | mode | light vertices | B/vertex | peak RSS MiB | guard estimate MiB |",
         "|---|---|---|---|---|---|",
