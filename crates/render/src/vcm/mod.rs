@@ -748,9 +748,25 @@ fn build_grid<V: MergeData<S>, S: SpectralMode>(
 /// iteration's vertices (16 chunks: enough parallel work for 16 threads).
 pub(crate) const LIGHT_BATCH: usize = 16 * LIGHT_CHUNK;
 
-/// Traces the `pixel_count` light sub-paths of `iteration` in parallel chunks and appends their
-/// vertices and path ends to `store`, in path order (deterministic for any thread count).
-/// Returns the light-tracing splats, per chunk in path order.
+/// Traces the `pixel_count` light sub-paths of `iteration` in batches of parallel chunks and
+/// hands each chunk to `take`, in path order (deterministic for any thread count); a batch is
+/// handed over before the next one is traced.
+fn trace_in_batches<S: SpectralMode>(
+    scene: &Scene,
+    (seed, iteration): (u64, u64),
+    it: &Iteration,
+    pixel_count: usize,
+    sets: &WavelengthSource<S>,
+    mut take: impl FnMut(LightChunk<S>),
+) {
+    for batch in (0..pixel_count).step_by(LIGHT_BATCH) {
+        let paths = batch..(batch + LIGHT_BATCH).min(pixel_count);
+        trace_light_chunks(scene, seed, iteration, it, paths, sets).into_iter().for_each(&mut take);
+    }
+}
+
+/// Traces the light sub-paths of `iteration` and appends their vertices and path ends to
+/// `store`, in path order. Returns the light-tracing splats, per chunk in path order.
 fn trace_light_pass<S: SpectralMode>(
     scene: &Scene,
     seed: u64,
@@ -761,21 +777,17 @@ fn trace_light_pass<S: SpectralMode>(
     store: &mut LightVertexStore<S>,
 ) -> Vec<Vec<Splat>> {
     let mut splats = Vec::new();
-    for batch in (0..pixel_count).step_by(LIGHT_BATCH) {
-        let paths = batch..(batch + LIGHT_BATCH).min(pixel_count);
-        for (vertices, ends, chunk_splats) in trace_light_chunks(scene, seed, iteration, it, paths, sets) {
-            let base = store.vertices.len() as u32;
-            store.vertices.extend_from_slice(&vertices);
-            store.path_ends.extend(ends.iter().map(|e| e + base));
-            splats.push(chunk_splats);
-        }
-    }
+    trace_in_batches(scene, (seed, iteration), it, pixel_count, sets, |(vertices, ends, chunk_splats)| {
+        let base = store.vertices.len() as u32;
+        store.vertices.extend_from_slice(&vertices);
+        store.path_ends.extend(ends.iter().map(|e| e + base));
+        splats.push(chunk_splats);
+    });
     splats
 }
 
-/// Traces the `pixel_count` light sub-paths of `iteration` in parallel chunks and replaces
-/// `records` with the merging-only records of their vertices, in path order; returns each
-/// sub-path's end index.
+/// Traces the light sub-paths of `iteration` and replaces `records` with the merging-only
+/// records of their vertices, in path order; returns each sub-path's end index.
 fn trace_merge_records<S: SpectralMode>(
     scene: &Scene,
     seed: u64,
@@ -787,14 +799,11 @@ fn trace_merge_records<S: SpectralMode>(
 ) -> Vec<u32> {
     records.clear();
     let mut path_ends = Vec::with_capacity(pixel_count);
-    for batch in (0..pixel_count).step_by(LIGHT_BATCH) {
-        let paths = batch..(batch + LIGHT_BATCH).min(pixel_count);
-        for (vertices, ends, _) in trace_light_chunks(scene, seed, iteration, it, paths, sets) {
-            let base = records.len() as u32;
-            records.extend(vertices.iter().map(MergeRecord::from));
-            path_ends.extend(ends.iter().map(|e| e + base));
-        }
-    }
+    trace_in_batches(scene, (seed, iteration), it, pixel_count, sets, |(vertices, ends, _)| {
+        let base = records.len() as u32;
+        records.extend(vertices.iter().map(MergeRecord::from));
+        path_ends.extend(ends.iter().map(|e| e + base));
+    });
     path_ends
 }
 
