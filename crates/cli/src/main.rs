@@ -133,7 +133,7 @@ struct RenderArgs {
     /// Russian roulette of the path tracer (pt): N = Mitsuba 3's rule from bounce N on
     /// (survival min(max throughput, 0.95)), or `albedo` = the BSDF's continuation probability at
     /// every bounce (the VCM engine's rule, which the other algorithms always use).
-    #[arg(long, default_value = "5", value_name = "N|albedo", value_parser = parse_russian_roulette)]
+    #[arg(long, default_value = "albedo", value_name = "N|albedo", value_parser = parse_russian_roulette)]
     rr_depth: RussianRoulette,
     /// MIS heuristic of the path tracer (pt): balance or power (exponent 2).
     #[arg(long, default_value = "balance", value_name = "balance|power", value_parser = parse_heuristic)]

@@ -74,9 +74,10 @@ impl RussianRoulette {
 }
 
 impl Default for RussianRoulette {
-    /// Mitsuba 3's default, `rr_depth` = 5.
+    /// The albedo rule (the path tracer's rule before Mitsuba's was added; Mitsuba's does not
+    /// yet measure better on the reference scenes, docs/performance.md).
     fn default() -> Self {
-        RussianRoulette::Throughput { start: 5 }
+        RussianRoulette::Albedo
     }
 }
 
@@ -119,7 +120,7 @@ impl Heuristic {
 }
 
 impl PathTracer {
-    /// The path tracer with next-event estimation, Mitsuba's Russian roulette and the balance
+    /// The path tracer with next-event estimation, the default Russian roulette and the balance
     /// heuristic.
     pub fn new(max_length: u32) -> Self {
         Self {
