@@ -159,11 +159,11 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                 out.record(Family::NextEvent, 1, t, next_event(scene, &path, &end, rng, k, w).to_rgb(w));
                 // Connections to the pixel's light sub-path (s, t > 1), stored in path order.
                 for light in light_path.iter() {
-                    if light.path_length() + 1 + path.path_length > it.max_length {
+                    if light.record.path_length() + 1 + path.path_length > it.max_length {
                         break;
                     }
                     let value = connect_vertices(scene, &path, &end, light, k, w, rng);
-                    out.record(Family::Connection, light.path_length() + 1, t, value.to_rgb(w));
+                    out.record(Family::Connection, light.record.path_length() + 1, t, value.to_rgb(w));
                 }
             }
             if let Some(source) = merge_source {

@@ -190,7 +190,7 @@ pub fn connect_vertices<S: SpectralMode>(
     rng: &mut Rng,
 ) -> S {
     let (bsdf, position) = (end.bsdf, end.position);
-    let to_light = light.position - position;
+    let to_light = light.record.position - position;
     let distance_squared = to_light.length_squared();
     let distance = distance_squared.sqrt();
     let direction = to_light / distance;
@@ -202,13 +202,13 @@ pub fn connect_vertices<S: SpectralMode>(
     let pdfs = ConnectionPdfs {
         camera_forward_a: camera_eval.pdf.forward.0 * camera_continuation * light_eval.cos_generated * inv_d2,
         camera_reverse_w: camera_eval.pdf.reverse.0 * camera_continuation,
-        light_forward_a: light_eval.pdf.forward.0 * light.continuation * camera_eval.cos_generated * inv_d2,
-        light_reverse_w: light_eval.pdf.reverse.0 * light.continuation,
+        light_forward_a: light_eval.pdf.forward.0 * light.record.continuation * camera_eval.cos_generated * inv_d2,
+        light_reverse_w: light_eval.pdf.reverse.0 * light.record.continuation,
     };
-    let light_mis = light.mis(k);
+    let light_mis = light.record.mis(k);
     let weight = mis::connection_weight(&light_mis, &camera.mis, &pdfs, k);
     let geometry = camera_eval.cos_generated * light_eval.cos_generated * inv_d2;
-    let both_terminated = camera.terminated && light.terminated();
+    let both_terminated = camera.terminated && light.record.terminated();
     let scale = if both_terminated { S::DOUBLE_TERMINATION } else { 1.0 };
     let light_fluorescent = light.fluorescent(scene);
     if end.fluorescent.is_none() && light_fluorescent.is_none() && camera.slots == S::Slots::default() {
@@ -218,11 +218,12 @@ pub fn connect_vertices<S: SpectralMode>(
         if value.is_black() || scene.occluded(position, direction, distance) {
             return S::default();
         }
-        return camera.throughput * light.throughput * value;
+        return camera.throughput * light.record.throughput * value;
     }
     // Fluorescence on the way: scatter the light throughput at the light end, then at the
     // camera end, by slot; read it through the camera path's slots.
-    let leaving = scatter_slots(light_fluorescent.as_ref(), wavelengths, light_eval.value, light.throughput, rng);
+    let leaving =
+        scatter_slots(light_fluorescent.as_ref(), wavelengths, light_eval.value, light.record.throughput, rng);
     let value = end.receive(camera, camera_eval.value, leaving, rng, wavelengths) * (weight * geometry * scale);
     if value.is_black() || scene.occluded(position, direction, distance) {
         return S::default();

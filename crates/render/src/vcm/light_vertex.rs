@@ -15,6 +15,9 @@
 //!   exact algebra (the recursion is linear), so only float rounding differs;
 //! - material index (21 bits), path length (10 bits) and the termination flag share one word.
 //!
+//! A [`LightVertex`] is its [`MergeRecord`] (what merging reads) plus normals and texture
+//! coordinates; the memory-efficient mode keeps only the records.
+//!
 //! Everything else (position, throughput, texture coordinates, continuation probability) is
 //! stored at full `f32` precision.
 
@@ -30,10 +33,11 @@ pub const MAX_MATERIAL: u32 = (1 << 21) - 1;
 /// Largest path length a light vertex can store (2¹⁰ − 1 segments).
 pub const MAX_PATH_LENGTH: u32 = (1 << 10) - 1;
 
-/// A stored light sub-path vertex: 64 bytes in RGB mode, 68 in spectral mode (four wavelengths
-/// of throughput instead of three channels).
+/// What merging reads of a stored light vertex, and all the memory-efficient mode keeps of it:
+/// 48 bytes in RGB mode, 52 in spectral mode (four wavelengths of throughput instead of three
+/// channels).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LightVertex<S: SpectralMode = Rgb> {
+pub struct MergeRecord<S: SpectralMode = Rgb> {
     /// Position on the surface.
     pub position: Vec3,
     /// Throughput of the light sub-path up to this vertex (emitted energy / pdfs, BSDFs and
@@ -43,17 +47,71 @@ pub struct LightVertex<S: SpectralMode = Rgb> {
     d_vcm: f32,
     c_vc: f32,
     c_vm: f32,
-    /// Octahedral codes of the fixed direction (towards the previous vertex), the geometric
-    /// and the shading normal.
+    /// Octahedral code of the fixed direction (towards the previous vertex).
     fixed: u32,
-    normal: u32,
-    shading_normal: u32,
-    /// Texture coordinates.
-    pub uv: Vec2,
     /// Material (bits 0–20), path length (bits 21–30), termination flag (bit 31).
     packed: u32,
     /// Russian-roulette continuation probability of the vertex's BSDF.
     pub continuation: f32,
+}
+
+impl<S: SpectralMode> MergeRecord<S> {
+    /// The MIS quantities for the constants `k` (dVC and dVM rebuilt by eqs. 62, 63).
+    #[inline]
+    pub fn mis(&self, k: &MisConstants) -> SubPathMis {
+        SubPathMis { d_vcm: self.d_vcm, d_vc: 0.0, d_vm: 0.0, c_vc: self.c_vc, c_vm: self.c_vm }.for_constants(k)
+    }
+
+    /// Unit direction towards the previous vertex (decoded).
+    #[inline]
+    pub fn fixed(&self) -> Vec3 {
+        octahedral::decode(self.fixed)
+    }
+
+    /// Segments from the light to this vertex.
+    #[inline]
+    pub fn path_length(&self) -> u32 {
+        (self.packed >> 21) & MAX_PATH_LENGTH
+    }
+
+    /// Material index.
+    #[inline]
+    pub fn material(&self) -> u32 {
+        self.packed & MAX_MATERIAL
+    }
+
+    /// The light sub-path kept only its hero wavelength ([`super::subpath::SubPath::terminated`]).
+    #[inline]
+    pub fn terminated(&self) -> bool {
+        self.packed >> 31 != 0
+    }
+}
+
+impl<S: SpectralMode> AsRef<MergeRecord<S>> for MergeRecord<S> {
+    #[inline]
+    fn as_ref(&self) -> &MergeRecord<S> {
+        self
+    }
+}
+
+/// A stored light sub-path vertex: 64 bytes in RGB mode, 68 in spectral mode. Its merging
+/// record plus what only connections need to rebuild its BSDF.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightVertex<S: SpectralMode = Rgb> {
+    /// What merging reads (connections read it too).
+    pub record: MergeRecord<S>,
+    /// Octahedral codes of the geometric and the shading normal.
+    normal: u32,
+    shading_normal: u32,
+    /// Texture coordinates.
+    pub uv: Vec2,
+}
+
+impl<S: SpectralMode> AsRef<MergeRecord<S>> for LightVertex<S> {
+    #[inline]
+    fn as_ref(&self) -> &MergeRecord<S> {
+        &self.record
+    }
 }
 
 /// What the light pass knows of a vertex it stores.
@@ -90,49 +148,22 @@ impl<S: SpectralMode> LightVertex<S> {
         let packed = data.material.min(MAX_MATERIAL)
             | data.path_length.min(MAX_PATH_LENGTH) << 21
             | u32::from(data.terminated) << 31;
-        Self {
+        let record = MergeRecord {
             position: data.position,
             throughput: data.throughput,
             d_vcm: data.mis.d_vcm,
             c_vc: data.mis.c_vc,
             c_vm: data.mis.c_vm,
             fixed: octahedral::encode(data.fixed),
+            packed,
+            continuation: data.continuation,
+        };
+        Self {
+            record,
             normal: octahedral::encode(data.normal),
             shading_normal: octahedral::encode(data.shading_normal),
             uv: data.uv,
-            packed,
-            continuation: data.continuation,
         }
-    }
-
-    /// The MIS quantities for the constants `k` (dVC and dVM rebuilt by eqs. 62, 63).
-    #[inline]
-    pub fn mis(&self, k: &MisConstants) -> SubPathMis {
-        SubPathMis { d_vcm: self.d_vcm, d_vc: 0.0, d_vm: 0.0, c_vc: self.c_vc, c_vm: self.c_vm }.for_constants(k)
-    }
-
-    /// Unit direction towards the previous vertex (decoded).
-    #[inline]
-    pub fn fixed(&self) -> Vec3 {
-        octahedral::decode(self.fixed)
-    }
-
-    /// Segments from the light to this vertex.
-    #[inline]
-    pub fn path_length(&self) -> u32 {
-        (self.packed >> 21) & MAX_PATH_LENGTH
-    }
-
-    /// Material index.
-    #[inline]
-    pub fn material(&self) -> u32 {
-        self.packed & MAX_MATERIAL
-    }
-
-    /// The light sub-path kept only its hero wavelength ([`super::subpath::SubPath::terminated`]).
-    #[inline]
-    pub fn terminated(&self) -> bool {
-        self.packed >> 31 != 0
     }
 
     /// Rebuilds the vertex's BSDF (importance transport) at the hero wavelength `hero`.
@@ -143,127 +174,14 @@ impl<S: SpectralMode> LightVertex<S> {
             shading_normal: octahedral::decode(self.shading_normal),
             uv: self.uv,
         };
-        Bsdf::new_at(&scene.materials[self.material() as usize], &point, self.fixed(), TransportMode::Importance, hero)
+        let material = &scene.materials[self.record.material() as usize];
+        Bsdf::new_at(material, &point, self.record.fixed(), TransportMode::Importance, hero)
     }
 
     /// The vertex's fluorescence, if its material is fluorescent.
     #[inline]
     pub fn fluorescent<'s>(&self, scene: &'s Scene) -> Option<crate::fluorescent::FluorescentVertex<'s>> {
-        crate::fluorescent::FluorescentVertex::at(&scene.materials[self.material() as usize], self.uv)
-    }
-}
-
-/// What merging reads of a stored light vertex, from a full record ([`LightVertex`]) or a
-/// merging-only one ([`MergeRecord`]).
-pub trait MergeData<S: SpectralMode>: Copy + Send + Sync {
-    /// Position on the surface.
-    fn position(&self) -> Vec3;
-    /// Throughput of the light sub-path up to the vertex.
-    fn throughput(&self) -> S;
-    /// The MIS quantities for the constants `k` (dVC and dVM rebuilt by eqs. 62, 63).
-    fn mis(&self, k: &MisConstants) -> SubPathMis;
-    /// Unit direction towards the previous vertex.
-    fn fixed(&self) -> Vec3;
-    /// Segments from the light to the vertex.
-    fn path_length(&self) -> u32;
-    /// The light sub-path kept only its hero wavelength.
-    fn terminated(&self) -> bool;
-    /// Russian-roulette continuation probability of the vertex's BSDF.
-    fn continuation(&self) -> f32;
-}
-
-impl<S: SpectralMode> MergeData<S> for LightVertex<S> {
-    #[inline]
-    fn position(&self) -> Vec3 {
-        self.position
-    }
-    #[inline]
-    fn throughput(&self) -> S {
-        self.throughput
-    }
-    #[inline]
-    fn mis(&self, k: &MisConstants) -> SubPathMis {
-        LightVertex::mis(self, k)
-    }
-    #[inline]
-    fn fixed(&self) -> Vec3 {
-        LightVertex::fixed(self)
-    }
-    #[inline]
-    fn path_length(&self) -> u32 {
-        LightVertex::path_length(self)
-    }
-    #[inline]
-    fn terminated(&self) -> bool {
-        LightVertex::terminated(self)
-    }
-    #[inline]
-    fn continuation(&self) -> f32 {
-        self.continuation
-    }
-}
-
-/// The merging-only record of the memory-efficient mode: 48 bytes in RGB mode, 52 in spectral
-/// mode. It drops what only connections need (material, normals, texture coordinates): that
-/// mode connects to a light sub-path traced again right before the camera path.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MergeRecord<S: SpectralMode = Rgb> {
-    position: Vec3,
-    throughput: S,
-    d_vcm: f32,
-    c_vc: f32,
-    c_vm: f32,
-    /// Octahedral code of the fixed direction.
-    fixed: u32,
-    /// Path length (bits 21–30) and termination flag (bit 31), as in [`LightVertex`].
-    packed: u32,
-    continuation: f32,
-}
-
-impl<S: SpectralMode> From<&LightVertex<S>> for MergeRecord<S> {
-    #[inline]
-    fn from(v: &LightVertex<S>) -> Self {
-        Self {
-            position: v.position,
-            throughput: v.throughput,
-            d_vcm: v.d_vcm,
-            c_vc: v.c_vc,
-            c_vm: v.c_vm,
-            fixed: v.fixed,
-            packed: v.packed & !MAX_MATERIAL,
-            continuation: v.continuation,
-        }
-    }
-}
-
-impl<S: SpectralMode> MergeData<S> for MergeRecord<S> {
-    #[inline]
-    fn position(&self) -> Vec3 {
-        self.position
-    }
-    #[inline]
-    fn throughput(&self) -> S {
-        self.throughput
-    }
-    #[inline]
-    fn mis(&self, k: &MisConstants) -> SubPathMis {
-        SubPathMis { d_vcm: self.d_vcm, d_vc: 0.0, d_vm: 0.0, c_vc: self.c_vc, c_vm: self.c_vm }.for_constants(k)
-    }
-    #[inline]
-    fn fixed(&self) -> Vec3 {
-        octahedral::decode(self.fixed)
-    }
-    #[inline]
-    fn path_length(&self) -> u32 {
-        (self.packed >> 21) & MAX_PATH_LENGTH
-    }
-    #[inline]
-    fn terminated(&self) -> bool {
-        self.packed >> 31 != 0
-    }
-    #[inline]
-    fn continuation(&self) -> f32 {
-        self.continuation
+        crate::fluorescent::FluorescentVertex::at(&scene.materials[self.record.material() as usize], self.uv)
     }
 }
 
@@ -398,6 +316,8 @@ mod tests {
         // The memory estimates and the documentation quote these sizes.
         assert_eq!(std::mem::size_of::<LightVertex<Rgb>>(), 64);
         assert_eq!(std::mem::size_of::<LightVertex<Hero4>>(), 68);
+        assert_eq!(std::mem::size_of::<MergeRecord<Rgb>>(), 48);
+        assert_eq!(std::mem::size_of::<MergeRecord<Hero4>>(), 52);
     }
 
     fn data(i: u32) -> VertexData<Rgb> {
@@ -423,18 +343,19 @@ mod tests {
         for i in 0..20 {
             let d = data(i);
             let v = LightVertex::new(&d);
-            assert_eq!((v.position, v.throughput, v.uv, v.continuation), (d.position, d.throughput, d.uv, 0.75));
-            assert_eq!((v.material(), v.path_length(), v.terminated()), (d.material, d.path_length, d.terminated));
-            assert!(v.fixed().angle_between(d.fixed) < octahedral::MAX_ANGULAR_ERROR);
+            let r = &v.record;
+            assert_eq!((r.position, r.throughput, v.uv, r.continuation), (d.position, d.throughput, d.uv, 0.75));
+            assert_eq!((r.material(), r.path_length(), r.terminated()), (d.material, d.path_length, d.terminated));
+            assert!(r.fixed().angle_between(d.fixed) < octahedral::MAX_ANGULAR_ERROR);
             // dVC, dVM come back from cVC, cVM for any constants (eqs. 62, 63).
-            let mis = v.mis(&k);
+            let mis = r.mis(&k);
             assert_eq!(mis, d.mis.for_constants(&k));
             assert_eq!((mis.d_vcm, mis.c_vc, mis.c_vm), (d.mis.d_vcm, d.mis.c_vc, d.mis.c_vm));
         }
         // Out-of-range fields saturate instead of spilling into their neighbours.
         let d = VertexData { material: u32::MAX, path_length: 5000, terminated: false, ..data(1) };
-        let v = LightVertex::new(&d);
-        assert_eq!((v.material(), v.path_length(), v.terminated()), (MAX_MATERIAL, MAX_PATH_LENGTH, false));
+        let r = LightVertex::new(&d).record;
+        assert_eq!((r.material(), r.path_length(), r.terminated()), (MAX_MATERIAL, MAX_PATH_LENGTH, false));
     }
 
     #[test]

@@ -6,7 +6,7 @@ use scene::Bsdf;
 use spectrum::{Rgb, SpectralMode};
 
 use super::connect::CameraEnd;
-use super::light_vertex::{LightVertex, MergeData, MergeRecord};
+use super::light_vertex::{LightVertex, MergeRecord};
 use super::mis::{self, MisConstants};
 use super::subpath::SubPath;
 use super::technique_images::Record;
@@ -96,7 +96,7 @@ type MergeArgs<'a, 'b, S> = (
 );
 
 /// [`merge`] over one kind of stored record.
-fn merge_with<S: SpectralMode, R: Record, V: MergeData<S>>(
+fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
     vertices: &[V],
     (camera, end, grid, group, radius, max_length, weighting, k, wavelengths): MergeArgs<S>,
     rng: &mut Rng,
@@ -112,7 +112,7 @@ fn merge_with<S: SpectralMode, R: Record, V: MergeData<S>>(
         Some(group) => k.vm_normalization * group.normalization_scale,
     };
     let visit = |slot: usize| {
-        let light = &vertices[slot];
+        let light = vertices[slot].as_ref();
         // A merged path is one segment shorter than a connected one.
         if light.path_length() + camera.path_length > max_length {
             return;
@@ -125,14 +125,14 @@ fn merge_with<S: SpectralMode, R: Record, V: MergeData<S>>(
                 // The reverse density belongs to the camera BSDF, but the light sub-path's
                 // Russian roulette would have governed it.
                 let forward = eval.pdf.forward.0 * continuation;
-                let reverse = eval.pdf.reverse.0 * light.continuation();
+                let reverse = eval.pdf.reverse.0 * light.continuation;
                 mis::merge_weight(&light_mis, &camera.mis, forward, reverse, k)
             }
         };
         let weight = if camera.terminated && light.terminated() { weight * S::DOUBLE_TERMINATION } else { weight };
         let scattered = match label {
-            None => S::from_reflectance(wavelengths, eval.value) * light.throughput(),
-            Some((f, label)) => f.apply_slots(wavelengths, label, eval.value, light.throughput()),
+            None => S::from_reflectance(wavelengths, eval.value) * light.throughput,
+            Some((f, label)) => f.apply_slots(wavelengths, label, eval.value, light.throughput),
         };
         let part = scattered * weight;
         sum += part;

@@ -55,7 +55,7 @@ use crate::hash_grid::HashGrid;
 use camera_pass::trace_camera_path_recorded;
 use connect::{Splat, SplatTarget};
 use light_pass::trace_light_path;
-use light_vertex::{LightPath, LightVertex, LightVertexStore, MergeData, MergeRecord};
+use light_vertex::{LightPath, LightVertex, LightVertexStore, MergeRecord};
 use merge::{MergeGroup, MergeSource, MergeVertices};
 use mis::MisConstants;
 use technique_images::{TechniqueFrame, TechniqueLayout, TechniqueValues};
@@ -540,7 +540,7 @@ impl<S: SpectralMode> Engine<S> {
                 it.radius,
                 &mut self.merge_groups,
             );
-            self.store.permute_to_slots(&order);
+            self.store.permute_to_slots(order.as_deref().unwrap_or(self.grid.sorted_indices()));
         }
         let grid_build = start.elapsed() - light_pass;
         let store = &self.store;
@@ -607,7 +607,11 @@ impl<S: SpectralMode> Engine<S> {
             let order = build_grid(&self.records, &ends, groups, &mut self.grid, it.radius, &mut self.merge_groups);
             drop(ends);
             let mut slots = Vec::new();
-            light_vertex::slot_map(self.records.len(), &order, &mut slots);
+            light_vertex::slot_map(
+                self.records.len(),
+                order.as_deref().unwrap_or(self.grid.sorted_indices()),
+                &mut slots,
+            );
             light_vertex::permute(&mut self.records, &slots);
         } else {
             self.records.clear();
@@ -712,24 +716,25 @@ impl<S: SpectralMode> Engine<S> {
 }
 
 /// Builds `grid` over `items` (light vertices of sub-paths ending at `path_ends`, in path order)
-/// for queries of radius `radius` and returns the grid order: `order[s]` is the item that
-/// belongs in slot `s` (the caller permutes the items so). With wavelength groups (their layout
-/// and the merge path count N_VM) the items enter the grid group after group and
-/// `merge_groups` gets each group's range of grid indices; otherwise it is emptied.
-fn build_grid<V: MergeData<S>, S: SpectralMode>(
+/// for queries of radius `radius`. The grid order — `order[s]` is the item that belongs in slot
+/// `s`, the caller permutes the items so — is the grid's own [`HashGrid::sorted_indices`]
+/// (`None` is returned), except with wavelength groups (their layout and the merge path count
+/// N_VM): the items then enter the grid group after group, the order is returned, and
+/// `merge_groups` gets each group's range of grid indices (otherwise it is emptied).
+fn build_grid<V: AsRef<MergeRecord<S>> + Sync, S: SpectralMode>(
     items: &[V],
     path_ends: &[u32],
     groups: Option<(&wavelengths::GroupLayout, f32)>,
     grid: &mut HashGrid,
     radius: f32,
     merge_groups: &mut Vec<MergeGroup>,
-) -> Vec<u32> {
+) -> Option<Vec<u32>> {
     merge_groups.clear();
     let mut positions: Vec<math::Vec3> = Vec::new();
     let Some((layout, merge_paths)) = groups else {
-        items.par_iter().map(MergeData::position).collect_into_vec(&mut positions);
+        items.par_iter().map(|v| v.as_ref().position).collect_into_vec(&mut positions);
         grid.build(&positions, radius);
-        return grid.sorted_indices().to_vec();
+        return None;
     };
     let (order, starts) = layout.order_by_group(path_ends);
     merge_groups.extend(layout.sizes().iter().enumerate().map(|(g, &size)| MergeGroup {
@@ -737,10 +742,10 @@ fn build_grid<V: MergeData<S>, S: SpectralMode>(
         end: starts[g + 1],
         normalization_scale: if size > 0 { merge_paths / size as f32 } else { 0.0 },
     }));
-    order.par_iter().map(|&i| items[i as usize].position()).collect_into_vec(&mut positions);
+    order.par_iter().map(|&i| items[i as usize].as_ref().position).collect_into_vec(&mut positions);
     grid.build(&positions, radius);
     // Grid indices count in group order; the items are in path order.
-    grid.sorted_indices().iter().map(|&j| order[j as usize]).collect()
+    Some(grid.sorted_indices().iter().map(|&j| order[j as usize]).collect())
 }
 
 /// Light sub-paths traced per batch of the light pass: the vertices of one batch are moved into
@@ -801,7 +806,7 @@ fn trace_merge_records<S: SpectralMode>(
     let mut path_ends = Vec::with_capacity(pixel_count);
     trace_in_batches(scene, (seed, iteration), it, pixel_count, sets, |(vertices, ends, _)| {
         let base = records.len() as u32;
-        records.extend(vertices.iter().map(MergeRecord::from));
+        records.extend(vertices.iter().map(|v| v.record));
         path_ends.extend(ends.iter().map(|e| e + base));
     });
     path_ends
