@@ -454,6 +454,30 @@ fn furnace_with_sphere(emission: f32, albedo: f32, resolution: u32) -> Scene {
 }
 
 #[test]
+fn only_dispersive_glass_counts_as_dispersion() {
+    // The engine merges across wavelength groups only in scenes without dispersion (a camera
+    // sub-path through dispersive glass keeps one wavelength and cannot be re-evaluated at
+    // another group's): the scene must tell them apart, blends included.
+    assert!(furnace_with_sphere(1.0, 0.5, 8).has_dispersion());
+    assert!(!common::furnace(1.0, 0.5, 8).has_dispersion());
+    assert!(bk7(true).is_dispersive() && !bk7(false).is_dispersive());
+    let constant = Material::Dielectric {
+        int_ior: 1.5,
+        ext_ior: 1.0,
+        specular_reflectance: Texture::Constant(Rgb::WHITE),
+        specular_transmittance: Texture::Constant(Rgb::WHITE),
+        dispersion: Some(Ior::Constant(1.5)),
+    };
+    assert!(!constant.is_dispersive(), "a constant index is not dispersive");
+    let blend = |m: Material| Material::Blend {
+        weight: Texture::Constant(Rgb::splat(0.5)),
+        first: Box::new(m),
+        second: Box::new(bk7(false)),
+    };
+    assert!(blend(bk7(true)).is_dispersive() && !blend(bk7(false)).is_dispersive());
+}
+
+#[test]
 fn dispersive_sphere_leaves_the_furnace_unchanged() {
     // A lossless dielectric does not change a uniform, isotropic radiance field (radiance/η² is
     // conserved along refracted rays and Fresnel reflection plus transmission sum to one), so

@@ -237,6 +237,26 @@ fn algorithms_agree_with_bpt_on_the_area_light_scene() {
     );
 }
 
+/// The area-light scene in spectral mode, where the merging algorithms merge across wavelength
+/// groups (every camera vertex with the photons of all K groups, each at its group's
+/// wavelengths, `render::vcm::wavelengths`): ppm, bpm and vcm against spectral bpt (and bpt
+/// against spectral pt). Power: a bias of 3.5 %, as the RGB test.
+#[test]
+fn merging_across_wavelength_groups_agrees_with_bpt_spectral() {
+    check(
+        &[273],
+        &[
+            Plan { algorithm: "ppm", scale: 4, iterations: 100 },
+            Plan { algorithm: "bpm", scale: 4, iterations: 100 },
+            Plan { algorithm: "vcm", scale: 4, iterations: 50 },
+        ],
+        Plan { algorithm: "bpt", scale: 1, iterations: 3000 },
+        PT_REFERENCE,
+        true,
+        |_| 0.035,
+    );
+}
+
 /// The fluorescent Cornell box (`cornell-fluorescent`, RGB mode: the reradiation matrix).
 /// Power: every comparison detects a bias of 2 % (measured 0.8–1.5 %).
 #[test]

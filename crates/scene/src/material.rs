@@ -244,6 +244,19 @@ impl Material {
         }
     }
 
+    /// Whether this material, or one it blends or wraps, has a wavelength-dependent index of
+    /// refraction (a dielectric with `dispersion`).
+    pub fn is_dispersive(&self) -> bool {
+        match self {
+            Material::Dielectric { dispersion, .. } => dispersion.is_some_and(|ior| ior.is_dispersive()),
+            Material::Blend { first, second, .. } => first.is_dispersive() || second.is_dispersive(),
+            Material::TwoSided { front, back } => {
+                front.is_dispersive() || back.as_ref().is_some_and(|b| b.is_dispersive())
+            }
+            _ => false,
+        }
+    }
+
     /// Whether a fluorescent material is nested inside a blend or a two-sided material.
     fn nests_fluorescence(&self) -> bool {
         match self {

@@ -232,6 +232,12 @@ impl Scene {
         self.materials.iter().any(|m| m.fluorescence().is_some())
     }
 
+    /// Whether any material has a wavelength-dependent index of refraction (spectral mode then
+    /// keeps only the hero wavelength after refracting through it).
+    pub fn has_dispersion(&self) -> bool {
+        self.materials.iter().any(Material::is_dispersive)
+    }
+
     /// Light `index`'s emitted quantity `rgb` (a radiance, intensity or irradiance one of its
     /// queries returned, linear sRGB) in spectral mode `S`. In RGB mode it is `rgb` itself. In
     /// spectral mode, a light without a spectrum gives the upsampled `rgb` times the colour

@@ -10,10 +10,11 @@ use spectrum::SpectralMode;
 
 use super::connect::{CameraEnd, connect_vertices, next_event};
 use super::light_vertex::LightPath;
-use super::merge::{MergeSource, MergeWeighting, merge};
+use super::merge::{MergeScope, MergeSource, MergeWeighting, merge};
 use super::mis::{self, SubPathMis};
 use super::subpath::SubPath;
 use super::technique_images::{Record, TechniqueValues};
+use super::wavelengths::MAX_CROSS_GROUPS;
 use super::{Family, FamilyValues, Iteration, Techniques};
 use crate::fluorescent::{FluorescentVertex, view};
 
@@ -104,6 +105,13 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         terminated: false,
         slots: S::Slots::default(),
     };
+    // Merging across wavelength groups: the throughput at every group's wavelengths.
+    let group_sets = match merge_source.map(|s| s.scope) {
+        Some(MergeScope::AcrossGroups(_, sets)) => sets,
+        _ => &[],
+    };
+    let mut group_throughputs = [path.throughput; MAX_CROSS_GROUPS];
+    let group_throughputs = &mut group_throughputs[..group_sets.len()];
 
     loop {
         let Some(hit) = scene.intersect(&path.ray) else {
@@ -168,8 +176,9 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             }
             if let Some(source) = merge_source {
                 let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
-                let merged = merge(&path, &end, source, radius, it.max_length, weighting, k, w, rng, out);
-                out.record(Family::Merging, 0, t, merged.to_rgb(w));
+                let merged =
+                    merge(&path, group_throughputs, &end, source, radius, it.max_length, weighting, k, w, rng, out);
+                out.record(Family::Merging, 0, t, merged);
                 // Photon mapping stops at the first non-specular vertex; through a mixed
                 // vertex it continues along the specular lobes only.
                 if techniques.ppm {
@@ -180,8 +189,13 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                 }
             }
         }
-        if !path.scatter(&bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true) {
+        let Some(scattered) = path.scatter(&bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true)
+        else {
             break;
+        };
+        for (throughput, set) in group_throughputs.iter_mut().zip(group_sets) {
+            // As `SubPath::scatter` updates `path.throughput` (no fluorescence here).
+            *throughput *= S::from_reflectance(set, scattered.value) * scattered.scale;
         }
     }
 }

@@ -103,7 +103,7 @@ pub fn trace_light_path<S: SpectralMode>(
         if path.path_length + 2 > it.max_length {
             break;
         }
-        if !path.scatter(&bsdf, hit.position, rng, false, k, wavelengths, fluorescent.as_ref(), false) {
+        if path.scatter(&bsdf, hit.position, rng, false, k, wavelengths, fluorescent.as_ref(), false).is_none() {
             break;
         }
     }

@@ -76,6 +76,7 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
         radius,
         pixel_radii: None,
         techniques,
+        across_groups: false,
     };
     let pilot = light_paths.clamp(1, PILOT_PATHS);
     let mut vertices = Vec::new();

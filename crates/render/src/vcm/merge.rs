@@ -40,8 +40,24 @@ pub struct MergeSource<'a, S: SpectralMode = Rgb> {
     pub vertices: MergeVertices<'a, S>,
     /// The range-search structure over them.
     pub grid: &'a HashGrid,
-    /// Merge only with the light vertices of this wavelength group (`None`: with all).
-    pub group: Option<MergeGroup>,
+    /// Which of them, and at which wavelengths.
+    pub scope: MergeScope<'a, S>,
+}
+
+/// Which stored light vertices a camera vertex merges with, and at which wavelengths.
+#[derive(Clone, Copy)]
+pub enum MergeScope<'a, S: SpectralMode = Rgb> {
+    /// All, at the camera sub-path's wavelengths (RGB mode; spectral mode with one wavelength
+    /// set per iteration).
+    All,
+    /// Those of the camera sub-path's wavelength group only (spectral mode in scenes whose
+    /// camera sub-paths cannot be re-evaluated at other wavelengths: dispersion, fluorescence).
+    Group(MergeGroup),
+    /// All, each at the wavelengths of its own group (`groups[h]` its grid indices, `sets[h]`
+    /// its wavelengths): the camera sub-path's throughput is carried at every group's set
+    /// (`group_throughputs` of [`merge`]), so a camera vertex merges with all N_L light
+    /// sub-paths, as in RGB mode, while every pixel still sees K wavelength sets.
+    AcrossGroups(&'a [MergeGroup], &'a [S::Wavelengths]),
 }
 
 /// The light vertices of one wavelength group (spectral mode, `super::wavelengths`): those
@@ -59,12 +75,15 @@ pub struct MergeGroup {
 }
 
 /// The merged contribution at camera vertex `position` within `radius` (throughput and kernel
-/// normalisation included). When `out` wants per-(s, t) values ([`Record::PER_TECHNIQUE`]),
-/// each merged light vertex's part is also staged there (s = its light sub-path vertices, the
-/// merged one included; t = the camera sub-path's vertices); the caller records the sum.
+/// normalisation included), in linear sRGB. `group_throughputs[h]` is the camera sub-path's
+/// throughput at the wavelengths of group h ([`MergeScope::AcrossGroups`] only; else empty).
+/// When `out` wants per-(s, t) values ([`Record::PER_TECHNIQUE`]), each merged light vertex's
+/// part is also staged there (s = its light sub-path vertices, the merged one included; t = the
+/// camera sub-path's vertices); the caller records the sum.
 #[allow(clippy::too_many_arguments)]
 pub fn merge<S: SpectralMode, R: Record>(
     camera: &SubPath<S>,
+    group_throughputs: &[S],
     end: &CameraEnd,
     source: &MergeSource<S>,
     radius: f32,
@@ -74,8 +93,8 @@ pub fn merge<S: SpectralMode, R: Record>(
     wavelengths: &S::Wavelengths,
     rng: &mut Rng,
     out: &mut R,
-) -> S {
-    let args = (camera, end, source.grid, source.group, radius, max_length, weighting, k, wavelengths);
+) -> Rgb {
+    let args = (camera, group_throughputs, end, source, radius, max_length, weighting, k, wavelengths);
     match source.vertices {
         MergeVertices::Full(vertices) => merge_with(vertices, args, rng, out),
         MergeVertices::Compact(vertices) => merge_with(vertices, args, rng, out),
@@ -85,9 +104,9 @@ pub fn merge<S: SpectralMode, R: Record>(
 /// The arguments of [`merge`] that [`merge_with`] passes through.
 type MergeArgs<'a, 'b, S> = (
     &'a SubPath<S>,
+    &'a [S],
     &'a CameraEnd<'b>,
-    &'a HashGrid,
-    Option<MergeGroup>,
+    &'a MergeSource<'a, S>,
     f32,
     u32,
     MergeWeighting,
@@ -98,26 +117,27 @@ type MergeArgs<'a, 'b, S> = (
 /// [`merge`] over one kind of stored record.
 fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
     vertices: &[V],
-    (camera, end, grid, group, radius, max_length, weighting, k, wavelengths): MergeArgs<S>,
+    (camera, group_throughputs, end, source, radius, max_length, weighting, k, wavelengths): MergeArgs<S>,
     rng: &mut Rng,
     out: &mut R,
-) -> S {
+) -> Rgb {
     let (bsdf, position): (&Bsdf, Vec3) = (end.bsdf, end.position);
     // One label for the camera vertex, shared by all its merges.
     let label = end.fluorescent.map(|f| (f, f.sample_label::<S>(rng.uniform())));
     let continuation = bsdf.continuation_probability();
-    let mut sum = S::default();
-    let normalization = match group {
-        None => k.vm_normalization,
-        Some(group) => k.vm_normalization * group.normalization_scale,
+    let grid = source.grid;
+    let normalization = match source.scope {
+        MergeScope::Group(group) => k.vm_normalization * group.normalization_scale,
+        MergeScope::All | MergeScope::AcrossGroups(..) => k.vm_normalization,
     };
-    let visit = |slot: usize| {
-        let light = vertices[slot].as_ref();
+    // The MIS-weighted value of merging with `light` at wavelengths `w` (before the camera
+    // sub-path's throughput and the kernel normalisation), or `None` when it does not count.
+    let part = |light: &MergeRecord<S>, w: &S::Wavelengths| -> Option<S> {
         // A merged path is one segment shorter than a connected one.
         if light.path_length() + camera.path_length > max_length {
-            return;
+            return None;
         }
-        let Some(eval) = bsdf.evaluate(light.fixed()) else { return };
+        let eval = bsdf.evaluate(light.fixed())?;
         let weight = match weighting {
             MergeWeighting::None => 1.0,
             MergeWeighting::Mis => {
@@ -131,20 +151,50 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
         };
         let weight = if camera.terminated && light.terminated() { weight * S::DOUBLE_TERMINATION } else { weight };
         let scattered = match label {
-            None => S::from_reflectance(wavelengths, eval.value) * light.throughput,
-            Some((f, label)) => f.apply_slots(wavelengths, label, eval.value, light.throughput),
+            None => S::from_reflectance(w, eval.value) * light.throughput,
+            Some((f, label)) => f.apply_slots(w, label, eval.value, light.throughput),
         };
-        let part = scattered * weight;
-        sum += part;
-        if R::PER_TECHNIQUE {
-            let t = camera.path_length + 1;
-            let value = camera.throughput * view(&camera.slots, part) * normalization;
-            out.stage_merge(light.path_length() + 1, t, value.to_rgb(wavelengths));
-        }
+        Some(scattered * weight)
     };
-    match group {
-        None => grid.for_each_slot_within(position, radius, visit),
-        Some(g) => grid.for_each_slot_within_indices(position, radius, g.first..g.end, visit),
+    let t = camera.path_length + 1;
+    match source.scope {
+        MergeScope::All | MergeScope::Group(_) => {
+            let mut sum = S::default();
+            let visit = |slot: usize| {
+                let light = vertices[slot].as_ref();
+                let Some(part) = part(light, wavelengths) else { return };
+                sum += part;
+                if R::PER_TECHNIQUE {
+                    let value = camera.throughput * view(&camera.slots, part) * normalization;
+                    out.stage_merge(light.path_length() + 1, t, value.to_rgb(wavelengths));
+                }
+            };
+            match source.scope {
+                MergeScope::Group(g) => grid.for_each_slot_within_indices(position, radius, g.first..g.end, visit),
+                _ => grid.for_each_slot_within(position, radius, visit),
+            }
+            (camera.throughput * view(&camera.slots, sum) * normalization).to_rgb(wavelengths)
+        }
+        MergeScope::AcrossGroups(groups, sets) => {
+            // No fluorescence here (the engine groups such scenes): the slots are the identity.
+            let mut sums = [S::default(); super::wavelengths::MAX_CROSS_GROUPS];
+            let indices = grid.sorted_indices();
+            grid.for_each_slot_within(position, radius, |slot| {
+                let index = indices[slot];
+                let h = groups.iter().position(|g| index < g.end).unwrap_or(groups.len() - 1);
+                let light = vertices[slot].as_ref();
+                let Some(part) = part(light, &sets[h]) else { return };
+                sums[h] += part;
+                if R::PER_TECHNIQUE {
+                    let value = group_throughputs[h] * part * normalization;
+                    out.stage_merge(light.path_length() + 1, t, value.to_rgb(&sets[h]));
+                }
+            });
+            let mut total = Rgb::BLACK;
+            for (h, set) in sets.iter().enumerate() {
+                total += (group_throughputs[h] * sums[h] * normalization).to_rgb(set);
+            }
+            total
+        }
     }
-    camera.throughput * view(&camera.slots, sum) * normalization
 }

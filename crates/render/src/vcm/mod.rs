@@ -56,7 +56,7 @@ use camera_pass::trace_camera_path_recorded;
 use connect::{Splat, SplatTarget};
 use light_pass::trace_light_path;
 use light_vertex::{LightPath, LightVertex, LightVertexStore, MergeRecord};
-use merge::{MergeGroup, MergeSource, MergeVertices};
+use merge::{MergeGroup, MergeScope, MergeSource, MergeVertices};
 use mis::MisConstants;
 use technique_images::{TechniqueFrame, TechniqueLayout, TechniqueValues};
 use wavelengths::{DEFAULT_WAVELENGTH_GROUPS, WavelengthSource};
@@ -256,6 +256,9 @@ pub struct Iteration<'a> {
     pub pixel_radii: Option<&'a [f32]>,
     /// Which families are on.
     pub techniques: Techniques,
+    /// Camera vertices merge with the light vertices of every wavelength group, each at its
+    /// group's wavelengths ([`merge::MergeScope::AcrossGroups`]; spectral mode with groups).
+    pub across_groups: bool,
 }
 
 impl Iteration<'_> {
@@ -486,7 +489,8 @@ impl<S: SpectralMode> Engine<S> {
         let grouped = self.settings.spectral && techniques.merge;
         let groups = if grouped { self.settings.wavelength_groups.max(1) } else { 1 };
         let light_paths = pixel_count as f32;
-        let merge_paths = if groups > 1 { light_paths / groups as f32 } else { light_paths };
+        let across = groups > 1 && merges_across_groups(scene, groups);
+        let merge_paths = if groups > 1 && !across { light_paths / groups as f32 } else { light_paths };
         let it = Iteration {
             constants: MisConstants::with_merge_paths(
                 light_paths,
@@ -499,6 +503,7 @@ impl<S: SpectralMode> Engine<S> {
             radius,
             pixel_radii: self.pixel_footprints.as_ref().map(|_| pixel_radii.as_slice()),
             techniques,
+            across_groups: across,
         };
         let width = frame.width as usize;
         let sets = WavelengthSource::<S>::new(scene, seed, iteration, techniques.merge, groups, width, pixel_count);
@@ -544,8 +549,12 @@ impl<S: SpectralMode> Engine<S> {
         }
         let grid_build = start.elapsed() - light_pass;
         let store = &self.store;
-        let groups = (sets.groups(), self.merge_groups.as_slice());
-        let source = MergeSource { vertices: MergeVertices::Full(&self.store.vertices), grid: &self.grid, group: None };
+        let scopes = MergeScopes::new(it, sets, &self.merge_groups);
+        let source = MergeSource {
+            vertices: MergeVertices::Full(&self.store.vertices),
+            grid: &self.grid,
+            scope: MergeScope::All,
+        };
         let merge_source = it.techniques.merge.then_some(source);
         let width = frame.width as usize;
         let mut rejected =
@@ -557,13 +566,8 @@ impl<S: SpectralMode> Engine<S> {
                 let (x, y) = ((index % width) as u32, (index / width) as u32);
                 let light_path = store.path(index);
                 let wavelengths = sets.get(seed, iteration, index as u64);
-                let grouped = match groups {
-                    (Some(layout), ranges) => {
-                        merge_source.map(|s| MergeSource { group: Some(ranges[layout.group_of(index)]), ..s })
-                    }
-                    (None, _) => merge_source,
-                };
-                let merge = grouped.as_ref();
+                let scoped = merge_source.map(|s| MergeSource { scope: scopes.of(index), ..s });
+                let merge = scoped.as_ref();
                 trace_camera_path_recorded(scene, it, x, y, &mut rng, light_path, merge, &wavelengths, techniques)
             });
         let camera_pass = start.elapsed() - light_pass - grid_build;
@@ -620,8 +624,9 @@ impl<S: SpectralMode> Engine<S> {
         // Every row traces its pixels' light sub-paths and camera paths; rows return their
         // splats, per-pixel family values and rejected counts.
         let width = frame.width as usize;
-        let source = MergeSource { vertices: MergeVertices::Compact(&self.records), grid: &self.grid, group: None };
-        let groups = (sets.groups(), self.merge_groups.as_slice());
+        let source =
+            MergeSource { vertices: MergeVertices::Compact(&self.records), grid: &self.grid, scope: MergeScope::All };
+        let scopes = MergeScopes::new(it, sets, &self.merge_groups);
         let merge_source = it.techniques.merge.then_some(source);
         let family_frames = self.family_frames.as_mut();
         let record_families = family_frames.is_some();
@@ -659,12 +664,7 @@ impl<S: SpectralMode> Engine<S> {
                         let pixel_images = &mut technique_row[column * images..(column + 1) * images];
                         TechniqueValues::new(layout, pixel_images, &mut stage)
                     });
-                    let merge = match groups {
-                        (Some(layout), ranges) => {
-                            merge_source.map(|s| MergeSource { group: Some(ranges[layout.group_of(index)]), ..s })
-                        }
-                        (None, _) => merge_source,
-                    };
+                    let merge = merge_source.map(|s| MergeSource { scope: scopes.of(index), ..s });
                     let mut values = trace_camera_path_recorded(
                         scene,
                         it,
@@ -712,6 +712,41 @@ impl<S: SpectralMode> Engine<S> {
         self.stats.light_vertices = self.records.len();
         self.stats.bytes_per_vertex = std::mem::size_of::<MergeRecord<S>>();
         (rejected, splats)
+    }
+}
+
+/// Whether the camera sub-paths of `scene` merge with the light vertices of all `groups`
+/// wavelength groups (`super::wavelengths`, "Merging across groups"): only where no material is
+/// dispersive or fluorescent, and for at most [`wavelengths::MAX_CROSS_GROUPS`] groups.
+fn merges_across_groups(scene: &Scene, groups: u32) -> bool {
+    groups as usize <= wavelengths::MAX_CROSS_GROUPS && !scene.has_fluorescence() && !scene.has_dispersion()
+}
+
+/// The merge scope of each pixel of one iteration.
+enum MergeScopes<'a, S: SpectralMode> {
+    /// One for all pixels.
+    Same(MergeScope<'a, S>),
+    /// Pixel i merges within its group (`ranges[layout.group_of(i)]`).
+    OwnGroup(&'a wavelengths::GroupLayout, &'a [MergeGroup]),
+}
+
+impl<'a, S: SpectralMode> MergeScopes<'a, S> {
+    /// The scopes of iteration `it` with wavelength source `sets` and groups `ranges`.
+    fn new(it: &Iteration, sets: &'a WavelengthSource<S>, ranges: &'a [MergeGroup]) -> Self {
+        match (sets.groups(), sets.group_sets()) {
+            (Some(_), Some(group_sets)) if it.across_groups => Self::Same(MergeScope::AcrossGroups(ranges, group_sets)),
+            (Some(layout), _) => Self::OwnGroup(layout, ranges),
+            _ => Self::Same(MergeScope::All),
+        }
+    }
+
+    /// The scope of pixel `index`.
+    #[inline]
+    fn of(&self, index: usize) -> MergeScope<'a, S> {
+        match self {
+            Self::Same(scope) => *scope,
+            Self::OwnGroup(layout, ranges) => MergeScope::Group(ranges[layout.group_of(index)]),
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::Bsdf;
-use spectrum::SpectralMode;
+use spectrum::{Rgb, SpectralMode};
 
 use crate::fluorescent::{FluorescentVertex, view};
 
@@ -54,7 +54,7 @@ impl<S: SpectralMode> SubPath<S> {
     /// `specular_only`), applies Russian roulette, updates throughput and MIS quantities
     /// (eqs. 34–36, 53–55) and prepares the next ray. At a fluorescent vertex a label is drawn
     /// and applied as a light sub-path (`camera` false: by slot) or as a camera sub-path does.
-    /// Returns `false` when the walk ends.
+    /// Returns what scattering multiplied the throughput by, or `None` when the walk ends.
     #[allow(clippy::too_many_arguments)]
     pub fn scatter(
         &mut self,
@@ -66,13 +66,13 @@ impl<S: SpectralMode> SubPath<S> {
         wavelengths: &S::Wavelengths,
         fluorescent: Option<&FluorescentVertex>,
         camera: bool,
-    ) -> bool {
+    ) -> Option<Scattered> {
         let u = rng.uniform3();
         let sample = if specular_only { bsdf.sample_specular(u) } else { bsdf.sample(u) };
-        let Some(sample) = sample else { return false };
+        let sample = sample?;
         let continuation = bsdf.continuation_probability();
         if continuation < 1.0 && rng.uniform() >= continuation {
-            return false;
+            return None;
         }
         let specular = sample.lobe.is_specular();
         let forward = sample.pdf.forward.0 * continuation;
@@ -98,6 +98,18 @@ impl<S: SpectralMode> SubPath<S> {
         self.ray = Ray::new(position + RAY_EPSILON * sample.direction, sample.direction);
         self.origin_offset = RAY_EPSILON;
         self.path_length += 1;
-        true
+        Some(Scattered { value: sample.value, scale })
     }
+}
+
+/// What one scattering step multiplied a sub-path's throughput by (without a fluorescent
+/// label): the BSDF value, upsampled at the sub-path's wavelengths, times `scale`. Merging across
+/// wavelength groups re-applies it at other wavelengths (`super::merge::MergeScope`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scattered {
+    /// BSDF value f of the sampled direction, linear sRGB (1/sr; for specular lobes `ρ/|cos θ|`).
+    pub value: Rgb,
+    /// `|cos θ| / p`, p the solid-angle density of the direction times the continuation
+    /// probability (sr).
+    pub scale: f32,
 }

@@ -8,7 +8,7 @@
 //! - **with merging** (`ppm`, `bpm`, `vcm`) the sub-paths are split into `K` *wavelength
 //!   groups* ([`GroupLayout`]): pixel `i` and light sub-path `i` belong to group `g(i)`, every
 //!   group has its own set, and a camera vertex merges only with the light vertices of its
-//!   group. The `4K` wavelengths of an iteration are equally spaced in primary sample space
+//!   group (or with all of them, each at its own group's wavelengths, see below). The `4K` wavelengths of an iteration are equally spaced in primary sample space
 //!   (one random offset), so the colour of the image mean is stratified over `4K` wavelengths
 //!   instead of seeing 4 per iteration. `K = 1` is one set for the whole iteration.
 //!
@@ -27,6 +27,18 @@
 //! so its wavelengths have the density of the single-set sampler: each technique stays
 //! unbiased. The MIS counts (`super::mis::MisConstants`): light tracing still has N_L samples
 //! per pixel (every light sub-path splats with its own wavelengths), merging N_L/K.
+//!
+//! **Merging across groups.** Where no material is dispersive or fluorescent, a camera
+//! sub-path's throughput is a product of BSDF values upsampled linearly from RGB
+//! (`S::from_reflectance`) and of wavelength-independent factors (cosines, pdfs, the filter
+//! weight), so it can be carried at every group's set at once (K spectra, updated by each
+//! scattering step, [`super::subpath::Scattered`]). A camera vertex then merges with the light
+//! vertices of *every* group, each evaluated at its own group's wavelengths, and merging has
+//! N_L samples again, as in RGB mode (`super::merge::MergeScope::AcrossGroups`). Each merged
+//! pair is a path sampled with the photon's wavelength set, whose density is the single-set
+//! density, so the estimate stays unbiased; connections and light tracing are unchanged. A
+//! dispersive vertex keeps only the hero wavelength of its own set and a fluorescent one moves
+//! wavelengths between slots: neither can be re-evaluated, so such scenes merge within groups.
 
 use math::Rng;
 use scene::Scene;
@@ -43,6 +55,10 @@ const SHARED_WAVELENGTHS: u64 = (1 << 61) - 1;
 /// Wavelength groups per iteration of the merging algorithms in spectral mode (chosen by
 /// measurement, `docs/spectral.md`).
 pub const DEFAULT_WAVELENGTH_GROUPS: u32 = 4;
+
+/// The most wavelength groups a camera sub-path carries its throughput for when it merges across
+/// groups ([`super::merge::MergeScope::AcrossGroups`]); with more groups it merges within its own.
+pub const MAX_CROSS_GROUPS: usize = 16;
 
 /// Which group each light sub-path and pixel of an iteration belongs to, and how many there
 /// are in each group.
@@ -203,6 +219,14 @@ impl<S: SpectralMode> WavelengthSource<S> {
             Sets::PerPair => self.draw(seed, iteration, index),
             Sets::Shared(w) => *w,
             Sets::Grouped(layout, sets) => sets[layout.group_of(index as usize)],
+        }
+    }
+
+    /// The wavelength set of every group, when the iteration has more than one.
+    pub(super) fn group_sets(&self) -> Option<&[S::Wavelengths]> {
+        match &self.sets {
+            Sets::Grouped(_, sets) => Some(sets),
+            _ => None,
         }
     }
 
