@@ -331,7 +331,8 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
         }
         _ => None,
     };
-    let mut family_frame = FrameBuffer::new(camera.width, camera.height);
+    // Scratch for one family's iteration (allocated only when families are recorded).
+    let mut family_frame = FrameBuffer::new(0, 0);
     let progress = make_progress_bar(settings);
     let start = Instant::now();
     let mut last_checkpoint = Instant::now();
@@ -359,6 +360,9 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
         }
         if let (Some(films), Some(values)) = (&mut family_films, renderer.vcm_engine().and_then(|e| e.family_frames()))
         {
+            if family_frame.pixels.is_empty() {
+                family_frame = FrameBuffer::new(camera.width, camera.height);
+            }
             for (index, family_film) in films.iter_mut().enumerate() {
                 for (pixel, value) in family_frame.pixels.iter_mut().zip(values) {
                     *pixel = value.0[index];

@@ -213,25 +213,9 @@ impl HashGrid {
             return;
         }
 
-        // Cells and buckets. The clamps keep extreme radii free of NaNs; the cell function stays
-        // monotone, which is all the query needs.
-        let cell_size = (2.0 * radius * CELL_SCALE).min(f32::MAX);
-        let inv_cell = (1.0 / cell_size).min(f32::MAX);
-        let bucket_count = n.next_power_of_two().min(prev_power_of_two(self.bucket_limit));
+        let bucket_count = self.set_map(bounds, n, radius);
         let bucket_bits = bucket_count.trailing_zeros();
-        let mut map = CellMap {
-            origin: bounds.min,
-            inv_cell,
-            max_cell: [u32::MAX; 3],
-            max_scaled: Vec3::ZERO,
-            bucket_mask: (bucket_count - 1) as u32,
-        };
-        map.max_scaled = map.scaled(bounds.max);
-        map.max_cell = [0, 1, 2].map(|axis| map.max_scaled[axis] as u32);
-        self.map = map;
-        self.radius = radius;
-        self.radius_sq = radius * radius;
-        self.search_extent = (radius * SEARCH_SCALE).min(f32::MAX);
+        let map = self.map;
 
         // First level: partitions by the high bits of the bucket, plus a last partition for
         // skipped (non-finite) points, whose key is `bucket_count`.
@@ -322,6 +306,136 @@ impl HashGrid {
         });
     }
 
+    /// Sets the cells, buckets and radius of a build over `n` points within `bounds`; returns
+    /// the bucket count.
+    fn set_map(&mut self, bounds: Aabb, n: usize, radius: f32) -> usize {
+        // The clamps keep extreme radii free of NaNs; the cell function stays monotone, which
+        // is all the query needs.
+        let cell_size = (2.0 * radius * CELL_SCALE).min(f32::MAX);
+        let inv_cell = (1.0 / cell_size).min(f32::MAX);
+        let bucket_count = n.next_power_of_two().min(prev_power_of_two(self.bucket_limit));
+        let mut map = CellMap {
+            origin: bounds.min,
+            inv_cell,
+            max_cell: [u32::MAX; 3],
+            max_scaled: Vec3::ZERO,
+            bucket_mask: (bucket_count - 1) as u32,
+        };
+        map.max_scaled = map.scaled(bounds.max);
+        map.max_cell = [0, 1, 2].map(|axis| map.max_scaled[axis] as u32);
+        self.map = map;
+        self.radius = radius;
+        self.radius_sq = radius * radius;
+        self.search_extent = (radius * SEARCH_SCALE).min(f32::MAX);
+        bucket_count
+    }
+
+    /// Rebuilds the grid like [`HashGrid::build`] over the `n` points `position(0..n)`, but keeps
+    /// no copy of the positions and sorts with one key per point as its only scratch (4 bytes
+    /// per point besides the sorted indices, against 36 for [`HashGrid::build`]): the memory-
+    /// efficient mode. The slots, bucket by bucket in increasing index order, are those
+    /// [`HashGrid::build`] gives for the same positions. Queries must then hand the positions
+    /// back in slot order: [`HashGrid::for_each_slot_near`]. The scatter is sequential (a
+    /// counting sort; measured in docs/memory.md).
+    ///
+    /// # Panics
+    ///
+    /// If `n ≥ 2³¹`.
+    pub fn build_lean(&mut self, n: usize, position: impl Fn(usize) -> Vec3 + Sync, radius: f32) {
+        assert!(n < 1 << 31, "HashGrid: too many points ({n})");
+        self.clear();
+        self.sorted_positions = Vec::new();
+        self.pairs = Vec::new();
+        self.pair_positions = Vec::new();
+        self.chunk_counts = Vec::new();
+        if n == 0 || !(radius.is_finite() && radius > 0.0) {
+            return;
+        }
+        let bounds = (0..n)
+            .into_par_iter()
+            .step_by(CHUNK)
+            .map(|first| {
+                (first..(first + CHUNK).min(n)).map(&position).filter(|p| p.is_finite()).fold(Aabb::EMPTY, Aabb::grow)
+            })
+            .reduce(|| Aabb::EMPTY, Aabb::union);
+        if bounds.is_empty() {
+            return;
+        }
+        let bucket_count = self.set_map(bounds, n, radius);
+        let map = self.map;
+        let skipped = bucket_count as u32;
+        self.keys.resize(n, 0);
+        self.keys.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, keys)| {
+            for (offset, key) in keys.iter_mut().enumerate() {
+                let p = position(chunk * CHUNK + offset);
+                *key = if p.is_finite() { map.bucket_of(p) } else { skipped };
+            }
+        });
+        // Counting sort: `starts[b]` counts bucket b, becomes its end by a running sum, and is
+        // moved back to its start while the points are placed from the last one (stable).
+        self.starts.resize(bucket_count + 1, 0);
+        for &key in &self.keys {
+            self.starts[key as usize] += 1;
+        }
+        let stored = n - self.starts[bucket_count] as usize;
+        let mut end = 0;
+        for start in &mut self.starts[..bucket_count] {
+            end += *start;
+            *start = end;
+        }
+        self.starts[bucket_count] = stored as u32;
+        self.indices.resize(stored, 0);
+        for (index, &key) in self.keys.iter().enumerate().rev() {
+            if key != skipped {
+                let slot = &mut self.starts[key as usize];
+                *slot -= 1;
+                self.indices[*slot as usize] = index as u32;
+            }
+        }
+        self.keys = Vec::new();
+    }
+
+    /// Whether the grid holds the points' positions ([`HashGrid::build`]) or needs them from the
+    /// caller ([`HashGrid::build_lean`]).
+    pub fn keeps_positions(&self) -> bool {
+        self.indices.is_empty() || !self.sorted_positions.is_empty()
+    }
+
+    /// Calls `visit(slot)` for every stored point within `radius` (clamped to the build radius)
+    /// of `query` whose index lies in `indices` (all when `None`), reading the position of slot
+    /// `s` as `position(s)`: the query of a [`HashGrid::build_lean`] grid (it works after
+    /// [`HashGrid::build`] too).
+    pub fn for_each_slot_near(
+        &self,
+        query: Vec3,
+        radius: f32,
+        indices: Option<std::ops::Range<u32>>,
+        position: impl Fn(usize) -> Vec3,
+        mut visit: impl FnMut(usize),
+    ) {
+        let radius_sq = (radius * radius).min(self.radius_sq);
+        self.for_each_bucket(query, |start, end| {
+            let (first, last) = match &indices {
+                None => (start, end),
+                Some(range) => self.index_range(start, end, range),
+            };
+            for slot in first..last {
+                if (position(slot) - query).length_squared() <= radius_sq {
+                    visit(slot);
+                }
+            }
+        });
+    }
+
+    /// The slots `first..last` within bucket slots `start..end` whose indices lie in `range`.
+    #[inline]
+    fn index_range(&self, start: usize, end: usize, range: &std::ops::Range<u32>) -> (usize, usize) {
+        let bucket = &self.indices[start..end];
+        let first = bucket.partition_point(|&i| i < range.start);
+        let last = first + bucket[first..].partition_point(|&i| i < range.end);
+        (start + first, start + last)
+    }
+
     /// Forgets the indexed points (keeps the allocations).
     fn clear(&mut self) {
         self.radius = 0.0;
@@ -376,10 +490,8 @@ impl HashGrid {
     ) {
         let radius_sq = (radius * radius).min(self.radius_sq);
         self.for_each_bucket(query, |start, end| {
-            let bucket = &self.indices[start..end];
-            let first = bucket.partition_point(|&i| i < indices.start);
-            let last = first + bucket[first..].partition_point(|&i| i < indices.end);
-            self.visit_slice(start + first, start + last, query, radius_sq, &mut visit);
+            let (first, last) = self.index_range(start, end, &indices);
+            self.visit_slice(first, last, query, radius_sq, &mut visit);
         });
     }
 
@@ -733,6 +845,50 @@ mod tests {
         let mut qs = queries(&grid, &points, radius, 9);
         qs.extend([Vec3::splat(4.0), Vec3::new(4.0, 3.95, 4.02)]);
         check_against_brute_force(&grid, &points, radius, &qs);
+    }
+
+    #[test]
+    fn lean_build_has_the_same_slots_and_answers() {
+        // The lean build (no position copies, one key per point) must give the slots of the full
+        // build, so the memory-efficient mode reads its records in the same order, and its
+        // queries (positions handed back by the caller, with and without index ranges) must
+        // visit the same slots in the same order. NaN points are skipped by both.
+        let mut spread = uniform_points(1_500, 3, Vec3::ZERO, Vec3::ONE);
+        spread.extend(uniform_points(1_500, 4, Vec3::splat(1e7), Vec3::splat(1e7 + 8.0)));
+        let mut with_nan = clustered_points(2_000, 23);
+        with_nan[17] = Vec3::new(f32::NAN, 0.0, 0.0);
+        with_nan[1_999] = Vec3::splat(f32::INFINITY);
+        let cases = [
+            (clustered_points(5_000, 21), 0.01, usize::MAX),
+            (spread, 0.05, usize::MAX),
+            (clustered_points(3_000, 22), 0.02, 16),
+            (with_nan, 0.02, usize::MAX),
+        ];
+        for (points, radius, buckets) in cases {
+            let mut full = HashGrid::with_bucket_limit(buckets);
+            full.build(&points, radius);
+            let mut lean = HashGrid::with_bucket_limit(buckets);
+            lean.build_lean(points.len(), |i| points[i], radius);
+            assert_eq!(lean.sorted_indices(), full.sorted_indices());
+            assert_eq!(lean.starts, full.starts);
+            assert!(full.keeps_positions() && !lean.keeps_positions());
+            let position = |slot: usize| points[lean.sorted_indices()[slot] as usize];
+            let n = points.len() as u32;
+            let mut found = 0;
+            for q in queries(&full, &points, radius, 37) {
+                for range in [None, Some(0..n / 3), Some(n / 3..n)] {
+                    let (mut expected, mut got) = (Vec::new(), Vec::new());
+                    match &range {
+                        None => full.for_each_slot_within(q, radius, |s| expected.push(s)),
+                        Some(r) => full.for_each_slot_within_indices(q, radius, r.clone(), |s| expected.push(s)),
+                    }
+                    lean.for_each_slot_near(q, radius, range.clone(), position, |s| got.push(s));
+                    assert_eq!(got, expected, "query {q}, indices {range:?}");
+                    found += got.len();
+                }
+            }
+            assert!(found > 100, "too few points found ({found})");
+        }
     }
 
     #[test]

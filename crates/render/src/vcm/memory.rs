@@ -25,8 +25,9 @@ use super::{Iteration, LIGHT_STREAM, Techniques, VcmSettings};
 pub const PILOT_PATHS: usize = 4096;
 
 /// Bytes per pixel the driver holds whatever the algorithm: the film's sums and sums of squares
-/// (2 × 3 × f64), the iteration's frame and the family frame (2 × 3 × f32).
-pub const FILM_BYTES_PER_PIXEL: usize = 72;
+/// (2 × 3 × f64) and the iteration's frame (3 × f32). (Recording technique families adds five
+/// films and a frame.)
+pub const FILM_BYTES_PER_PIXEL: usize = 60;
 
 /// Bytes per pixel of the engine: the light sub-paths' end indices (u32).
 const ENGINE_BYTES_PER_PIXEL: usize = 4;
@@ -44,6 +45,11 @@ const GRID_BYTES_PER_VERTEX: usize = 40;
 /// or while the vertices are permuted into its order (the slot map is counted apart; the
 /// "placed" flags, 1).
 const GRID_BUILD_BYTES_PER_VERTEX: usize = 12;
+
+/// Bytes of the lean grid of the memory-efficient mode per indexed vertex
+/// ([`crate::hash_grid::HashGrid::build_lean`]): sorted indices (4) and one transient `u32`
+/// (the keys while it is built, then the slot map while the records are permuted).
+const LEAN_GRID_BYTES_PER_VERTEX: usize = 8;
 
 /// Bytes of the slot map that leads connections to vertices stored in grid order (u32).
 const SLOT_BYTES_PER_VERTEX: usize = 4;
@@ -143,12 +149,24 @@ fn peak_bytes(counts: &Counts, settings: &VcmSettings, memory_efficient: bool) -
     if settings.radius_mode == super::RadiusMode::PerPixel {
         per_pixel += PER_PIXEL_RADIUS_BYTES as f64;
     }
-    let splats = counts.splats * std::mem::size_of::<Splat>() as f64;
+    // Light-tracing splats: one sum per pixel, and the splats of one batch of light sub-paths
+    // (or of camera rows, memory-efficient mode) before they are summed.
+    let splats = if counts.splats > 0.0 {
+        let batch = (super::LIGHT_BATCH as f64).min(counts.pixels);
+        counts.pixels * std::mem::size_of::<Rgb>() as f64
+            + counts.splats / counts.pixels.max(1.0) * batch * std::mem::size_of::<Splat>() as f64
+    } else {
+        0.0
+    };
     let stored = techniques.store_light_vertices();
     let grid = if techniques.merge {
         let buckets = (counts.vertices.max(1.0) as u64).next_power_of_two() as f64;
-        counts.vertices * (GRID_BYTES_PER_VERTEX + SLOT_BYTES_PER_VERTEX + GRID_BUILD_BYTES_PER_VERTEX) as f64
-            + 4.0 * buckets
+        let per_vertex = if memory_efficient {
+            LEAN_GRID_BYTES_PER_VERTEX
+        } else {
+            GRID_BYTES_PER_VERTEX + SLOT_BYTES_PER_VERTEX + GRID_BUILD_BYTES_PER_VERTEX
+        };
+        counts.vertices * per_vertex as f64 + 4.0 * buckets
     } else {
         0.0
     };

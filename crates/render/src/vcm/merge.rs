@@ -169,17 +169,18 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
                     out.stage_merge(light.path_length() + 1, t, value.to_rgb(wavelengths));
                 }
             };
-            match source.scope {
-                MergeScope::Group(g) => grid.for_each_slot_within_indices(position, radius, g.first..g.end, visit),
-                _ => grid.for_each_slot_within(position, radius, visit),
-            }
+            let range = match source.scope {
+                MergeScope::Group(g) => Some(g.first..g.end),
+                _ => None,
+            };
+            for_each_near(grid, vertices, position, radius, range, visit);
             (camera.throughput * view(&camera.slots, sum) * normalization).to_rgb(wavelengths)
         }
         MergeScope::AcrossGroups(groups, sets) => {
             // No fluorescence here (the engine groups such scenes): the slots are the identity.
             let mut sums = [S::default(); super::wavelengths::MAX_CROSS_GROUPS];
             let indices = grid.sorted_indices();
-            grid.for_each_slot_within(position, radius, |slot| {
+            for_each_near(grid, vertices, position, radius, None, |slot| {
                 let index = indices[slot];
                 let h = groups.iter().position(|g| index < g.end).unwrap_or(groups.len() - 1);
                 let light = vertices[slot].as_ref();
@@ -196,5 +197,27 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
             }
             total
         }
+    }
+}
+
+/// Calls `visit(slot)` for the stored light vertices within `radius` of `position` (only those
+/// of grid indices `range`, when given), reading their positions from the grid, or from the
+/// records themselves when the grid keeps none (the memory-efficient mode's
+/// [`HashGrid::build_lean`]; the records are in slot order).
+fn for_each_near<S: SpectralMode, V: AsRef<MergeRecord<S>>>(
+    grid: &HashGrid,
+    vertices: &[V],
+    position: Vec3,
+    radius: f32,
+    range: Option<std::ops::Range<u32>>,
+    visit: impl FnMut(usize),
+) {
+    if grid.keeps_positions() {
+        match range {
+            None => grid.for_each_slot_within(position, radius, visit),
+            Some(range) => grid.for_each_slot_within_indices(position, radius, range, visit),
+        }
+    } else {
+        grid.for_each_slot_near(position, radius, range, |slot| vertices[slot].as_ref().position, visit);
     }
 }

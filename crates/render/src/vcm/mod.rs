@@ -42,6 +42,7 @@ pub mod light_vertex;
 pub mod memory;
 pub mod merge;
 pub mod mis;
+mod splats;
 pub mod subpath;
 pub mod technique_images;
 pub mod wavelengths;
@@ -53,11 +54,12 @@ use spectrum::{Hero4, Rgb, SpectralMode};
 
 use crate::hash_grid::HashGrid;
 use camera_pass::trace_camera_path_recorded;
-use connect::{Splat, SplatTarget};
+use connect::Splat;
 use light_pass::trace_light_path;
 use light_vertex::{LightPath, LightVertex, LightVertexStore, MergeRecord};
 use merge::{MergeGroup, MergeScope, MergeSource, MergeVertices};
 use mis::MisConstants;
+use splats::SplatSums;
 use technique_images::{TechniqueFrame, TechniqueLayout, TechniqueValues};
 use wavelengths::{DEFAULT_WAVELENGTH_GROUPS, WavelengthSource};
 
@@ -432,6 +434,8 @@ struct Engine<S: SpectralMode> {
     stats: IterationStats,
     /// The wavelength groups' ranges in the grid (spectral mode with merging; else empty).
     merge_groups: Vec<MergeGroup>,
+    /// The iteration's light-tracing splats, summed per pixel.
+    splat_sums: SplatSums,
 }
 
 /// One chunk of light sub-paths: vertices, per-path ends (relative), splats.
@@ -460,6 +464,7 @@ impl<S: SpectralMode> Engine<S> {
             technique_frame: None,
             stats: IterationStats::default(),
             merge_groups: Vec::new(),
+            splat_sums: SplatSums::default(),
         }
     }
 
@@ -533,7 +538,8 @@ impl<S: SpectralMode> Engine<S> {
         let pixel_count = frame.pixels.len();
         let start = std::time::Instant::now();
         self.store.clear();
-        let splat_chunks = trace_light_pass(scene, seed, iteration, it, pixel_count, sets, &mut self.store);
+        self.splat_sums.start(pixel_count, self.family_frames.is_some() || self.technique_frame.is_some());
+        trace_light_pass(scene, (seed, iteration), it, pixel_count, sets, &mut self.store, &mut self.splat_sums);
         let light_pass = start.elapsed();
         if it.techniques.merge {
             let groups = sets.groups().map(|g| (g, it.constants.merge_path_count));
@@ -544,6 +550,7 @@ impl<S: SpectralMode> Engine<S> {
                 &mut self.grid,
                 it.radius,
                 &mut self.merge_groups,
+                false,
             );
             self.store.permute_to_slots(order.as_deref().unwrap_or(self.grid.sorted_indices()));
         }
@@ -571,13 +578,11 @@ impl<S: SpectralMode> Engine<S> {
                 trace_camera_path_recorded(scene, it, x, y, &mut rng, light_path, merge, &wavelengths, techniques)
             });
         let camera_pass = start.elapsed() - light_pass - grid_build;
-        let splats = splat_chunks.iter().map(Vec::len).sum();
-        apply_splats(
-            frame,
+        let splats = self.splat_sums.finish(
+            &mut frame.pixels,
             &scene.camera,
             self.family_frames.as_mut(),
             self.technique_frame.as_mut(),
-            splat_chunks.iter().map(Vec::as_slice),
             &mut rejected,
         );
         self.stats.phases = PhaseTimes { light_pass, grid_build, camera_pass };
@@ -608,7 +613,8 @@ impl<S: SpectralMode> Engine<S> {
             let merging_only = Iteration { techniques: Techniques { connect: false, ..it.techniques }, ..*it };
             let ends = trace_merge_records(scene, seed, iteration, &merging_only, pixel_count, sets, &mut self.records);
             let groups = sets.groups().map(|g| (g, it.constants.merge_path_count));
-            let order = build_grid(&self.records, &ends, groups, &mut self.grid, it.radius, &mut self.merge_groups);
+            let order =
+                build_grid(&self.records, &ends, groups, &mut self.grid, it.radius, &mut self.merge_groups, true);
             drop(ends);
             let mut slots = Vec::new();
             light_vertex::slot_map(
@@ -622,90 +628,96 @@ impl<S: SpectralMode> Engine<S> {
         }
         let light_pass = start.elapsed();
         // Every row traces its pixels' light sub-paths and camera paths; rows return their
-        // splats, per-pixel family values and rejected counts.
+        // splats, per-pixel family values and rejected counts. Rows run in parallel batches, and
+        // each batch's splats are summed in row (= light sub-path) order before the next batch.
         let width = frame.width as usize;
         let source =
             MergeSource { vertices: MergeVertices::Compact(&self.records), grid: &self.grid, scope: MergeScope::All };
         let scopes = MergeScopes::new(it, sets, &self.merge_groups);
         let merge_source = it.techniques.merge.then_some(source);
-        let family_frames = self.family_frames.as_mut();
-        let record_families = family_frames.is_some();
+        let mut family_frames = self.family_frames.as_mut();
         let layout = self.technique_frame.as_ref().map(|t| t.layout);
         let images = layout.map_or(0, |l| l.len());
         if let Some(techniques) = &mut self.technique_frame {
             techniques.clear(pixel_count);
         }
+        if let Some(frames) = family_frames.as_deref_mut() {
+            frames.clear();
+        }
+        self.splat_sums.start(pixel_count, family_frames.is_some() || layout.is_some());
         // Row chunks of the technique values (none when not recorded).
         let mut technique_rows: Vec<&mut [Rgb]> = match &mut self.technique_frame {
             Some(techniques) => techniques.values.chunks_mut(width * images).collect(),
             None => frame.pixels.chunks(width).map(|_| <&mut [Rgb]>::default()).collect(),
         };
-        let rows: Vec<RowResult> = frame
-            .pixels
-            .par_chunks_mut(width)
-            .zip(technique_rows.par_iter_mut())
-            .enumerate()
-            .map(|(row, (pixels, technique_row))| {
-                let mut vertices = Vec::new();
-                let mut splats = Vec::new();
-                // Per-pixel family values, kept only when recorded.
-                let mut families = Vec::new();
-                let mut rejected = RejectedCounts::default();
-                let mut stage = vec![Rgb::BLACK; images];
-                for (column, pixel) in pixels.iter_mut().enumerate() {
-                    let index = row * width + column;
-                    vertices.clear();
-                    let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
-                    let wavelengths = sets.get(seed, iteration, index as u64);
-                    trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &wavelengths);
-                    let mut rng = Rng::for_stream(seed, iteration, index as u64);
-                    let light_path = LightPath::Contiguous(&vertices);
-                    let techniques = layout.map(|layout| {
-                        let pixel_images = &mut technique_row[column * images..(column + 1) * images];
-                        TechniqueValues::new(layout, pixel_images, &mut stage)
-                    });
-                    let merge = merge_source.map(|s| MergeSource { scope: scopes.of(index), ..s });
-                    let mut values = trace_camera_path_recorded(
-                        scene,
-                        it,
-                        column as u32,
-                        row as u32,
-                        &mut rng,
-                        light_path,
-                        merge.as_ref(),
-                        &wavelengths,
-                        techniques,
-                    );
-                    values.discard_overflow();
-                    values.count_rejected(&mut rejected);
-                    *pixel = values.total();
-                    if record_families {
-                        families.push(values);
-                    }
+        let record_families = family_frames.is_some();
+        let trace_row = |row: usize, pixels: &mut [Rgb], technique_row: &mut [Rgb]| -> RowResult {
+            let mut vertices = Vec::new();
+            let mut splats = Vec::new();
+            // Per-pixel family values, kept only when recorded.
+            let mut families = Vec::new();
+            let mut rejected = RejectedCounts::default();
+            let mut stage = vec![Rgb::BLACK; images];
+            for (column, pixel) in pixels.iter_mut().enumerate() {
+                let index = row * width + column;
+                vertices.clear();
+                let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
+                let wavelengths = sets.get(seed, iteration, index as u64);
+                trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &wavelengths);
+                let mut rng = Rng::for_stream(seed, iteration, index as u64);
+                let light_path = LightPath::Contiguous(&vertices);
+                let techniques = layout.map(|layout| {
+                    let pixel_images = &mut technique_row[column * images..(column + 1) * images];
+                    TechniqueValues::new(layout, pixel_images, &mut stage)
+                });
+                let merge = merge_source.map(|s| MergeSource { scope: scopes.of(index), ..s });
+                let mut values = trace_camera_path_recorded(
+                    scene,
+                    it,
+                    column as u32,
+                    row as u32,
+                    &mut rng,
+                    light_path,
+                    merge.as_ref(),
+                    &wavelengths,
+                    techniques,
+                );
+                values.discard_overflow();
+                values.count_rejected(&mut rejected);
+                *pixel = values.total();
+                if record_families {
+                    families.push(values);
                 }
-                (splats, families, rejected)
-            })
-            .collect();
-        let mut rejected = RejectedCounts::default();
-        if let Some(frames) = family_frames {
-            frames.clear();
-            for (_, families, _) in &rows {
-                frames.extend_from_slice(families);
             }
-        }
-        for (_, _, row_rejected) in &rows {
-            for (total, r) in rejected.iter_mut().zip(row_rejected) {
-                *total += r;
+            (splats, families, rejected)
+        };
+        let rows_per_batch = (LIGHT_BATCH / width.max(1)).max(1);
+        let mut rejected = RejectedCounts::default();
+        for (batch, (pixels, technique_rows)) in
+            frame.pixels.chunks_mut(width * rows_per_batch).zip(technique_rows.chunks_mut(rows_per_batch)).enumerate()
+        {
+            let rows: Vec<RowResult> = pixels
+                .par_chunks_mut(width)
+                .zip(technique_rows.par_iter_mut())
+                .enumerate()
+                .map(|(row, (pixels, technique_row))| trace_row(batch * rows_per_batch + row, pixels, technique_row))
+                .collect();
+            for (splats, families, row_rejected) in rows {
+                self.splat_sums.add(&scene.camera, splats);
+                if let Some(frames) = family_frames.as_deref_mut() {
+                    frames.extend_from_slice(&families);
+                }
+                for (total, r) in rejected.iter_mut().zip(row_rejected) {
+                    *total += r;
+                }
             }
         }
         let camera_pass = start.elapsed() - light_pass;
-        let splats = rows.iter().map(|r| r.0.len()).sum();
-        apply_splats(
-            frame,
+        let splats = self.splat_sums.finish(
+            &mut frame.pixels,
             &scene.camera,
-            self.family_frames.as_mut(),
+            family_frames,
             self.technique_frame.as_mut(),
-            rows.iter().map(|r| r.0.as_slice()),
             &mut rejected,
         );
         self.stats.phases = PhaseTimes { light_pass, grid_build: std::time::Duration::ZERO, camera_pass };
@@ -755,7 +767,10 @@ impl<'a, S: SpectralMode> MergeScopes<'a, S> {
 /// `s`, the caller permutes the items so — is the grid's own [`HashGrid::sorted_indices`]
 /// (`None` is returned), except with wavelength groups (their layout and the merge path count
 /// N_VM): the items then enter the grid group after group, the order is returned, and
-/// `merge_groups` gets each group's range of grid indices (otherwise it is emptied).
+/// `merge_groups` gets each group's range of grid indices (otherwise it is emptied). A `lean`
+/// grid ([`HashGrid::build_lean`], the memory-efficient mode) keeps no positions: queries read
+/// them from the items once they are permuted into slot order.
+#[allow(clippy::too_many_arguments)]
 fn build_grid<V: AsRef<MergeRecord<S>> + Sync, S: SpectralMode>(
     items: &[V],
     path_ends: &[u32],
@@ -763,12 +778,17 @@ fn build_grid<V: AsRef<MergeRecord<S>> + Sync, S: SpectralMode>(
     grid: &mut HashGrid,
     radius: f32,
     merge_groups: &mut Vec<MergeGroup>,
+    lean: bool,
 ) -> Option<Vec<u32>> {
     merge_groups.clear();
     let mut positions: Vec<math::Vec3> = Vec::new();
     let Some((layout, merge_paths)) = groups else {
-        items.par_iter().map(|v| v.as_ref().position).collect_into_vec(&mut positions);
-        grid.build(&positions, radius);
+        if lean {
+            grid.build_lean(items.len(), |i| items[i].as_ref().position, radius);
+        } else {
+            items.par_iter().map(|v| v.as_ref().position).collect_into_vec(&mut positions);
+            grid.build(&positions, radius);
+        }
         return None;
     };
     let (order, starts) = layout.order_by_group(path_ends);
@@ -777,8 +797,12 @@ fn build_grid<V: AsRef<MergeRecord<S>> + Sync, S: SpectralMode>(
         end: starts[g + 1],
         normalization_scale: if size > 0 { merge_paths / size as f32 } else { 0.0 },
     }));
-    order.par_iter().map(|&i| items[i as usize].as_ref().position).collect_into_vec(&mut positions);
-    grid.build(&positions, radius);
+    if lean {
+        grid.build_lean(order.len(), |j| items[order[j] as usize].as_ref().position, radius);
+    } else {
+        order.par_iter().map(|&i| items[i as usize].as_ref().position).collect_into_vec(&mut positions);
+        grid.build(&positions, radius);
+    }
     // Grid indices count in group order; the items are in path order.
     Some(grid.sorted_indices().iter().map(|&j| order[j as usize]).collect())
 }
@@ -806,24 +830,22 @@ fn trace_in_batches<S: SpectralMode>(
 }
 
 /// Traces the light sub-paths of `iteration` and appends their vertices and path ends to
-/// `store`, in path order. Returns the light-tracing splats, per chunk in path order.
+/// `store` and their light-tracing splats to `splats`, in path order.
 fn trace_light_pass<S: SpectralMode>(
     scene: &Scene,
-    seed: u64,
-    iteration: u64,
+    (seed, iteration): (u64, u64),
     it: &Iteration,
     pixel_count: usize,
     sets: &WavelengthSource<S>,
     store: &mut LightVertexStore<S>,
-) -> Vec<Vec<Splat>> {
-    let mut splats = Vec::new();
+    splats: &mut SplatSums,
+) {
     trace_in_batches(scene, (seed, iteration), it, pixel_count, sets, |(vertices, ends, chunk_splats)| {
         let base = store.vertices.len() as u32;
         store.vertices.extend_from_slice(&vertices);
         store.path_ends.extend(ends.iter().map(|e| e + base));
-        splats.push(chunk_splats);
+        splats.add(&scene.camera, chunk_splats);
     });
-    splats
 }
 
 /// Traces the light sub-paths of `iteration` and replaces `records` with the merging-only
@@ -932,44 +954,6 @@ fn render_pixels(
             rejected
         })
         .reduce(RejectedCounts::default, sum)
-}
-
-/// Adds light-tracing splats to the frame in the given (light sub-path) order: a pixel splat
-/// to its pixel, a filtered splat to every pixel within the camera filter's radius, weighted by
-/// the normalised filter ([`scene::Camera::filter_pixels`]).
-fn apply_splats<'s>(
-    frame: &mut FrameBuffer,
-    camera: &scene::Camera,
-    mut family_frames: Option<&mut Vec<FamilyValues>>,
-    mut technique_frame: Option<&mut TechniqueFrame>,
-    splats: impl Iterator<Item = &'s [Splat]>,
-    rejected: &mut RejectedCounts,
-) {
-    let mut add = |pixel: u32, s: u32, value: Rgb| {
-        frame.pixels[pixel as usize] += value;
-        if let Some(families) = family_frames.as_deref_mut() {
-            families[pixel as usize].add(Family::LightTracing, value);
-        }
-        if let Some(techniques) = technique_frame.as_deref_mut() {
-            techniques.add_splat(pixel as usize, s, value);
-        }
-    };
-    for splat in splats.flatten() {
-        let value = if splat.value.is_finite() {
-            splat.value
-        } else {
-            rejected[Family::LightTracing as usize] += 1;
-            Rgb::BLACK
-        };
-        match splat.target {
-            SplatTarget::Pixel(pixel) => add(pixel, splat.s, value),
-            SplatTarget::Filtered(raster) => {
-                for (pixel, filter) in camera.filter_pixels(raster) {
-                    add(pixel, splat.s, value * filter);
-                }
-            }
-        }
-    }
 }
 
 /// Per-pixel merging radii before the iteration schedule: the radius of a disc with the area
