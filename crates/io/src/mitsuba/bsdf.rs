@@ -284,6 +284,14 @@ impl<'a> Loader<'a> {
                 let color1 = color(self, "color1", 0.2)?;
                 Texture::Checkerboard { color0, color1, to_uv }
             }
+            // Mitsuba's constant texture of raw (unconverted) values.
+            "rawconstant" => {
+                let value = match p.vector("value") {
+                    Ok(Some(v)) => v,
+                    _ => [p.float_required("value")?; 3],
+                };
+                Texture::Constant(rgb(value))
+            }
             other => return Err(p.error(format!("unsupported texture type '{other}'"))),
         };
         p.finish(&mut self.warnings);
@@ -409,13 +417,16 @@ impl<'a> Loader<'a> {
                 }
                 let weight = self.texture_prop(&p, "weight", 0.5, reflectance)?;
                 let nested = self.nested_bsdfs(&p)?;
+                outermost_maps(&p, &nested)?;
                 let [first, second]: [Material; 2] = nested.try_into().map_err(|v: Vec<Material>| {
                     p.error(format!("needs exactly two nested BSDFs, found {}", v.len()))
                 })?;
                 Material::Blend { weight, first: Box::new(first), second: Box::new(second) }
             }
             "twosided" => {
-                let mut nested = self.nested_bsdfs(&p)?.into_iter();
+                let nested = self.nested_bsdfs(&p)?;
+                outermost_maps(&p, &nested)?;
+                let mut nested = nested.into_iter();
                 match (nested.next(), nested.next(), nested.next()) {
                     (Some(front), back, None) => {
                         Material::TwoSided { front: Box::new(front), back: back.map(Box::new) }
@@ -424,6 +435,7 @@ impl<'a> Loader<'a> {
                 }
             }
             "fluorescent" => self.fluorescent(&p)?,
+            "normalmap" | "bumpmap" => self.perturbing(&p)?,
             other => return Err(p.error(format!("unsupported bsdf type '{other}'"))),
         };
         p.ignore(&["sample_visible"]);
@@ -451,6 +463,43 @@ impl<'a> Loader<'a> {
         let quantum_yield = p.float_or("quantum_yield", 1.0)? as f32;
         let fluorescence = Fluorescence::new(peak, absorption, emission, quantum_yield).map_err(|e| p.error(e))?;
         let material = Material::Fluorescent { reflectance, fluorescence };
+        material.validate().map_err(|e| p.error(e))?;
+        Ok(material)
+    }
+
+    /// `<bsdf type="normalmap">` (a texture `normalmap` of tangent-space normals, raw data) or
+    /// `<bsdf type="bumpmap">` (one nested texture of any name, its luminance the height, and
+    /// `scale`, default 1), each around exactly one nested BSDF. They must be the outermost
+    /// BSDF of a shape.
+    fn perturbing(&mut self, p: &Plugin<'a>) -> Result<Material, SceneError> {
+        let texture = if p.ty == "normalmap" {
+            if p.named_object("normalmap").is_none() && !p.has("normalmap") {
+                return Err(p.error("missing the texture 'normalmap'"));
+            }
+            self.texture_prop(p, "normalmap", 0.5, SpectrumUse::Unbounded)?
+        } else {
+            let object = p
+                .objects
+                .iter()
+                .find(|o| !o.is_taken() && (o.node.tag == "texture" || o.node.tag == "ref") && o.name.is_some())
+                .ok_or_else(|| p.error("missing the height texture (a nested <texture>)"))?;
+            let name = object.name.clone().unwrap_or_default();
+            self.texture_prop(p, &name, 0.0, SpectrumUse::Unbounded)?
+        };
+        let mut nested = self.nested_bsdfs(p)?.into_iter();
+        let (Some(nested), None) = (nested.next(), nested.next()) else {
+            return Err(p.error("needs exactly one nested BSDF"));
+        };
+        let nested = Box::new(nested);
+        let material = if p.ty == "normalmap" {
+            Material::NormalMap { normals: texture, nested }
+        } else {
+            let scale = p.float_or("scale", 1.0)?;
+            if !scale.is_finite() {
+                return Err(p.error(format!("'scale' must be a finite number, got {scale}")));
+            }
+            Material::BumpMap { height: texture, scale: scale as f32, nested }
+        };
         material.validate().map_err(|e| p.error(e))?;
         Ok(material)
     }
@@ -483,6 +532,14 @@ impl<'a> Loader<'a> {
         }
         Ok(out)
     }
+}
+
+/// An error when a normal or bump map is nested in `p` (they must be the outermost BSDF).
+fn outermost_maps(p: &Plugin, nested: &[Material]) -> Result<(), SceneError> {
+    if nested.iter().any(Material::perturbs_shading_normal) {
+        return Err(p.error("a normalmap or bumpmap must be the outermost bsdf (wrap the blend or twosided in it)"));
+    }
+    Ok(())
 }
 
 /// The 2D affine part of a 4×4 `to_uv` transform (as Mitsuba reduces it).

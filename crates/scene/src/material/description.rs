@@ -132,6 +132,24 @@ pub enum Material {
         /// Absorption and re-emission.
         fluorescence: Fluorescence,
     },
+    /// Mitsuba's `normalmap`: `nested` with its shading normal read from a tangent-space
+    /// normal map (see `material/normal_map.rs`). Only as the outermost material.
+    NormalMap {
+        /// Tangent-space normals encoded as `(n + 1)/2` (raw, linear texels).
+        normals: Texture,
+        /// The material whose shading normal is replaced.
+        nested: Box<Material>,
+    },
+    /// Mitsuba's `bumpmap`: `nested` with its shading normal tilted by the gradient of a height
+    /// texture (see `material/bump_map.rs`). Only as the outermost material.
+    BumpMap {
+        /// Height (its luminance), in scene units per unit of `scale`.
+        height: Texture,
+        /// Factor on the height.
+        scale: f32,
+        /// The material whose shading normal is perturbed.
+        nested: Box<Material>,
+    },
     /// Makes a one-sided material two-sided: seen from behind it behaves as `back` (or as
     /// `front` when `back` is `None`) with the normal flipped.
     TwoSided {
@@ -156,6 +174,7 @@ impl Material {
         match self {
             Material::Blend { first, second, .. } => first.leaf_count() + second.leaf_count(),
             Material::TwoSided { front, back } => front.leaf_count() + back.as_ref().map_or(0, |b| b.leaf_count()),
+            Material::NormalMap { nested, .. } | Material::BumpMap { nested, .. } => nested.leaf_count(),
             _ => 1,
         }
     }
@@ -183,15 +202,50 @@ impl Material {
                     || front.nests_fluorescence()
                     || back.as_ref().is_some_and(|b| b.fluorescence().is_some() || b.nests_fluorescence())
             }
+            Material::NormalMap { nested, .. } | Material::BumpMap { nested, .. } => {
+                nested.fluorescence().is_some() || nested.nests_fluorescence()
+            }
+            _ => false,
+        }
+    }
+
+    /// Whether a normal or bump map is nested inside another material (or wraps one).
+    fn nests_perturbation(&self) -> bool {
+        match self {
+            Material::Blend { first, second, .. } => {
+                first.perturbs_shading_normal()
+                    || second.perturbs_shading_normal()
+                    || first.nests_perturbation()
+                    || second.nests_perturbation()
+            }
+            Material::TwoSided { front, back } => {
+                front.perturbs_shading_normal()
+                    || front.nests_perturbation()
+                    || back.as_ref().is_some_and(|b| b.perturbs_shading_normal() || b.nests_perturbation())
+            }
+            Material::NormalMap { nested, .. } | Material::BumpMap { nested, .. } => {
+                nested.perturbs_shading_normal() || nested.nests_perturbation()
+            }
             _ => false,
         }
     }
 
     /// Checks what a BSDF can represent: at most [`MAX_COMPONENTS`] leaves per side, fluorescent
-    /// materials only at the top level and conserving energy.
+    /// materials only at the top level and conserving energy, normal and bump maps only as the
+    /// outermost material.
     pub fn validate(&self) -> Result<(), String> {
         if self.nests_fluorescence() {
             return Err("a fluorescent material cannot be blended or made two-sided".into());
+        }
+        if self.nests_perturbation() {
+            return Err("a normalmap or bumpmap must be the outermost bsdf (not inside a blend, a twosided \
+                        or another normalmap/bumpmap)"
+                .into());
+        }
+        if let Material::NormalMap { nested, .. } | Material::BumpMap { nested, .. } = self
+            && matches!(**nested, Material::Reference(_))
+        {
+            return Err("a normalmap or bumpmap cannot wrap the reference material (it has no shading normal)".into());
         }
         if let Material::Fluorescent { reflectance, fluorescence } = self {
             fluorescence.check_energy(reflectance.max_value().max_component())?;

@@ -104,7 +104,11 @@ impl Model {
     /// hero wavelength `hero` (nm) in spectral mode.
     pub(super) fn from_leaf(material: &Material, uv: Vec2, hero: Option<f32>) -> Option<Model> {
         let model = match material {
-            Material::Reference(_) | Material::Blend { .. } | Material::TwoSided { .. } => return None,
+            Material::Reference(_)
+            | Material::Blend { .. }
+            | Material::TwoSided { .. }
+            | Material::NormalMap { .. }
+            | Material::BumpMap { .. } => return None,
             Material::Diffuse { reflectance } => Model::Diffuse(Diffuse { reflectance: reflectance.eval(uv) }),
             // Unit reflectance: the integrators apply the diagonal reflectance and the
             // re-emission themselves.

@@ -171,6 +171,10 @@ impl ModelBsdf {
                     self.add(front, uv, scale, side, hero);
                 }
             }
+            // The hit's shading normal is already perturbed (see `perturb.rs`).
+            Material::NormalMap { nested, .. } | Material::BumpMap { nested, .. } => {
+                self.add(nested, uv, scale, side, hero);
+            }
             leaf => {
                 if self.count < MAX_COMPONENTS
                     && let Some(model) = Model::from_leaf(leaf, uv, hero)

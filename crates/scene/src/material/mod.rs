@@ -53,6 +53,10 @@
 //! enum over the leaf models; `mixture` builds a BSDF from blends and two-sided wrappers;
 //! `bsdf` is the public per-hit [`Bsdf`]; `description` the [`Material`] enum loaders build.
 //!
+//! Normal and bump maps (`normal_map`, `bump_map`, dispatched in `perturb`) are not BSDFs but
+//! perturbations of the shading normal, which the scene applies when it builds a hit; their
+//! BSDF is the nested material's.
+//!
 //! **Adding a model** is one new file (a struct implementing `dispatch::LeafModel`), one arm in
 //! `dispatch::Model` and in its `each_model!` macro, the `from_leaf` arm, the [`Material`]
 //! variant, and the loader lines.
@@ -61,6 +65,7 @@
 use math::COSINE_EPSILON;
 
 mod bsdf;
+mod bump_map;
 mod coating;
 mod conductor;
 mod description;
@@ -70,6 +75,8 @@ mod dispatch;
 mod fresnel;
 mod lobe;
 mod mixture;
+mod normal_map;
+mod perturb;
 mod plastic;
 mod query;
 mod reference;
@@ -80,8 +87,10 @@ mod shading;
 mod thin_dielectric;
 
 pub use bsdf::Bsdf;
+pub use bump_map::luminance_gradient;
 pub use description::Material;
 pub use fresnel::fresnel_dielectric;
+pub use perturb::SurfaceTangents;
 pub use query::{BsdfEval, BsdfSample, LobeKind, PdfPair};
 pub use reference::ReferenceMaterial;
 pub use shading::{ShadingPoint, TransportMode};
