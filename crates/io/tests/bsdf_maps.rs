@@ -193,3 +193,64 @@ fn tilted_planes_reflect_the_sky_view_factor() {
         assert!(p_flat < 1e-6, "{name}: not distinguishable from the untilted plane (p = {p_flat:.2e})");
     }
 }
+
+/// pbrt-v4's `normalmap` (an image, read linear) and `displacement` (a float texture) on a
+/// 20 × 20 quad with uv over [0, 1]² under a unit constant sky, against `ρ (1 + cos a)/2`.
+#[test]
+fn pbrt_normal_map_and_displacement_tilt_the_plane() {
+    let dir = temp_dir();
+    // One texel encoding the normal tilted by 0.8 rad about v.
+    let a = 0.8f32;
+    let texel = [0.5 + 0.5 * a.sin(), 0.5, 0.5 + 0.5 * a.cos()];
+    write_image(&dir.join("normal.pfm"), &Image { width: 1, height: 1, pixels: vec![texel] }, &WriteOptions::default())
+        .unwrap();
+    // h(u) = 20 u: over 20 units of surface per unit of u, a 45° tilt.
+    let width = 64;
+    let pixels = (0..width).map(|i| [(i as f32 + 0.5) / width as f32; 3]).collect();
+    write_image(&dir.join("ramp.pfm"), &Image { width, height: 1, pixels }, &WriteOptions::default()).unwrap();
+    let scene = |material: &str| {
+        format!(
+            r#"LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective" "float fov" 30
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+Texture "h" "float" "imagemap" "string filename" "ramp.pfm" "float scale" 20 "string wrap" "clamp"
+{material}
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
+    "point3 P" [-10 -10 0  10 -10 0  10 10 0  -10 10 0] "point2 uv" [0 0  1 0  1 1  0 1]
+"#
+        )
+    };
+    let cases = [
+        ("plain", r#"Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]"#, 0.0),
+        ("normal map", r#"Material "diffuse" "rgb reflectance" [0.5 0.5 0.5] "string normalmap" "normal.pfm""#, 0.8),
+        (
+            "displacement",
+            r#"Material "diffuse" "rgb reflectance" [0.5 0.5 0.5] "texture displacement" "h""#,
+            std::f64::consts::FRAC_PI_4,
+        ),
+    ];
+    let alpha = sidak(1e-4, cases.len());
+    for (name, material, a) in cases {
+        let path = dir.join(format!("{}.pbrt", name.replace(' ', "_")));
+        std::fs::write(&path, scene(material)).unwrap();
+        let description = io::pbrt::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(description.warnings.is_empty(), "{name}: {:?}", description.warnings);
+        let (stats, _) = render(&description, 64);
+        let (mean, se) = (stats.mean(), stats.std_error());
+        let p = z_test_p(mean - sky_view(a), se);
+        assert!(p > alpha, "{name}: {mean} ± {se} vs {} (p = {p:.2e})", sky_view(a));
+        if a > 0.0 {
+            let p_flat = z_test_p(mean - RHO, se);
+            assert!(p_flat < 1e-6, "{name}: not distinguishable from the untilted plane (p = {p_flat:.2e})");
+        }
+    }
+    // Both at once is an error naming the parameter.
+    let path = dir.join("both.pbrt");
+    let both = r#"Material "diffuse" "string normalmap" "normal.pfm" "texture displacement" "h""#;
+    std::fs::write(&path, scene(both)).unwrap();
+    let Err(e) = io::pbrt::load(&path) else { panic!("both maps: expected an error") };
+    assert!(e.to_string().contains("not both"), "{e}");
+}

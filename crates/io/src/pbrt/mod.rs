@@ -33,6 +33,11 @@
 //! - **Roughness.** With `remaproughness` true (the default) α = √roughness (pbrt-v4's
 //!   `RoughnessToAlpha`), else α = roughness. Below α = 10⁻³ on both axes the surface is smooth,
 //!   as in pbrt.
+//! - **Normal and bump maps.** A material's `string normalmap` becomes
+//!   [`Material::NormalMap`] (the image read linear, looked up at (u, 1 − v)) and its
+//!   `texture displacement` a [`Material::BumpMap`] with scale 1 (the exact gradient instead of
+//!   pbrt's finite difference; pbrt's `displacement · ∂n/∂u` term is omitted). Both at once is
+//!   an error.
 //! - **Mix.** pbrt's `mix` picks `materials[1]` with probability `amount`; the expectation is our
 //!   [`Material::Blend`] with weight `amount`.
 //! - **Image environment maps** are resampled from pbrt's equal-area octahedral square to
@@ -938,6 +943,52 @@ impl Builder {
     }
 
     fn material(&self, file: &Path, d: &Directive, ty: &str) -> Result<Material, SceneError> {
+        let material = self.base_material(file, d, ty)?;
+        if ty == "mix" { Ok(material) } else { self.perturbation(file, d, material) }
+    }
+
+    /// pbrt-v4's `string normalmap` (an image of tangent-space normals, read linear, looked up
+    /// at (u, 1 − v) with repeat and bilinear filtering) or `float texture displacement` (a
+    /// bump map: the gradient of the displacement tilts the shading normal; pbrt's finite
+    /// difference is replaced by the exact gradient and its `displace · ∂n/∂u` term is
+    /// omitted) around `material`.
+    fn perturbation(&self, file: &Path, d: &Directive, material: Material) -> Result<Material, SceneError> {
+        let p = &d.params;
+        let normal_map = p.string("normalmap")?;
+        let displacement = p.find("displacement").map(|x| x.pos);
+        let nested = Box::new(material.clone());
+        let wrapped = match (normal_map, displacement) {
+            (None, None) => return Ok(material),
+            (Some((_, pos)), Some(_)) => {
+                return Err(p.error(pos, "give either \"normalmap\" or \"displacement\", not both"));
+            }
+            (Some((filename, pos)), None) => {
+                let path = resolve(file, &filename);
+                let stored = crate::read_texture_file(&path)
+                    .map_err(|e| p.error(pos, format!("cannot read normal map: {e}")))?;
+                let image = stored.linear(crate::TextureEncoding::Linear);
+                let pixels = image.pixels.iter().map(|&c| Rgb::from_array(c)).collect();
+                let image = Arc::new(TextureImage { width: image.width as u32, height: image.height as u32, pixels });
+                // (u, 1 − v): v = 0 is the bottom row; our v' runs from the top.
+                let to_uv = UvTransform {
+                    columns: [Vec2::new(1.0, 0.0), Vec2::new(0.0, -1.0)],
+                    translation: Vec2::new(0.0, 1.0),
+                };
+                let normals =
+                    Texture::bitmap(image, to_uv, Sampling { wrap: WrapMode::Repeat, filter: FilterMode::Bilinear });
+                Material::NormalMap { normals, nested }
+            }
+            (None, Some(_)) => {
+                let height = self.spectrum_texture(p, "displacement", Rgb::BLACK, false)?;
+                Material::BumpMap { height, scale: 1.0, nested }
+            }
+        };
+        let pos = p.params.first().map_or(d.pos, |x| x.pos);
+        wrapped.validate().map_err(|e| p.error(pos, e))?;
+        Ok(wrapped)
+    }
+
+    fn base_material(&self, file: &Path, d: &Directive, ty: &str) -> Result<Material, SceneError> {
         let p = &d.params;
         let two_sided = |m: Material| Material::TwoSided { front: Box::new(m), back: None };
         Ok(match ty {
