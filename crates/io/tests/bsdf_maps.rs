@@ -254,3 +254,59 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
     let Err(e) = io::pbrt::load(&path) else { panic!("both maps: expected an error") };
     assert!(e.to_string().contains("not both"), "{e}");
 }
+
+/// Textured `alpha_u`/`alpha_v` (Mitsuba) and `roughness` (pbrt, remapped by default) load as
+/// [`Material::TexturedRoughness`] around the rough model.
+#[test]
+fn textured_roughness_loads() {
+    let checks = r#"<float name="color0" value="0.05"/><float name="color1" value="0.3"/>"#;
+    let d = load_ok(&format!(
+        r#"<shape type="sphere"><bsdf type="roughconductor"><string name="distribution" value="ggx"/>
+            <texture name="alpha_u" type="checkerboard">{checks}</texture>
+            <float name="alpha_v" value="0.2"/>
+        </bsdf></shape>
+        <shape type="sphere"><bsdf type="roughplastic"><string name="distribution" value="ggx"/>
+            <texture name="alpha" type="checkerboard">{checks}</texture>
+        </bsdf></shape>"#
+    ));
+    match &d.materials[0] {
+        Material::TexturedRoughness { alpha_u, alpha_v, remap: false, nested } => {
+            assert!(matches!(alpha_u, scene::Texture::Checkerboard { .. }), "{alpha_u:?}");
+            assert_eq!(alpha_v.as_constant().map(|c| c.r), Some(0.2));
+            assert!(matches!(**nested, Material::RoughConductor { .. }), "{nested:?}");
+        }
+        m => panic!("{m:?}"),
+    }
+    assert!(
+        matches!(&d.materials[1], Material::TexturedRoughness { nested, .. } if matches!(**nested, Material::RoughPlastic { .. })),
+        "{:?}",
+        d.materials[1]
+    );
+    load_error(
+        &format!(
+            r#"<bsdf type="roughconductor"><texture name="alpha_u" type="checkerboard">{checks}</texture></bsdf>"#
+        ),
+        2,
+        &["both 'alpha_u' and 'alpha_v'"],
+    );
+
+    let dir = temp_dir();
+    let path = dir.join("rough.pbrt");
+    std::fs::write(
+        &path,
+        r#"Film "rgb" "integer xresolution" 4 "integer yresolution" 4
+WorldBegin
+Texture "r" "float" "checkerboard" "float tex1" 0.01 "float tex2" 0.09
+Material "dielectric" "texture roughness" "r"
+Shape "sphere"
+"#,
+    )
+    .unwrap();
+    let d = io::pbrt::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    match &d.materials[d.shapes[0].material as usize] {
+        Material::TexturedRoughness { remap: true, nested, .. } => {
+            assert!(matches!(**nested, Material::RoughDielectric { .. }), "{nested:?}");
+        }
+        m => panic!("{m:?}"),
+    }
+}

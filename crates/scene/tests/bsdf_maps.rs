@@ -228,3 +228,86 @@ fn maps_only_as_the_outermost_material() {
     let two_sided = normal_map(tilted(0.2), Material::TwoSided { front: Box::new(diffuse(0.5)), back: None });
     assert!(two_sided.validate().is_ok());
 }
+
+fn rough_conductor(alpha_u: f32, alpha_v: f32) -> Material {
+    Material::RoughConductor {
+        alpha_u,
+        alpha_v,
+        eta: Rgb::new(0.2, 0.9, 1.1),
+        k: Rgb::new(3.9, 2.4, 2.1),
+        specular_reflectance: Texture::Constant(Rgb::WHITE),
+    }
+}
+
+fn textured(alpha_u: Texture, alpha_v: Texture, remap: bool, nested: Material) -> Material {
+    Material::TexturedRoughness { alpha_u, alpha_v, remap, nested: Box::new(nested) }
+}
+
+/// Value and pdfs of two materials agree exactly over many direction pairs at `uv`.
+fn assert_same_bsdf(a: &Material, b: &Material, uv: Vec2, what: &str) {
+    let point = ShadingPoint { uv, ..ShadingPoint::flat(Vec3::Z) };
+    let mut rng = Rng::for_stream(3, 0, 0);
+    for _ in 0..200 {
+        let [u0, u1, _] = rng.uniform3();
+        let fixed = math::warp::cosine_hemisphere([u0, u1]);
+        let [u2, u3, _] = rng.uniform3();
+        let generated = math::warp::uniform_sphere([u2, u3]);
+        for mode in [TransportMode::Radiance, TransportMode::Importance] {
+            let (x, y) = (Bsdf::new(a, &point, fixed, mode), Bsdf::new(b, &point, fixed, mode));
+            let (x, y) = (x.and_then(|x| x.evaluate(generated)), y.and_then(|y| y.evaluate(generated)));
+            assert_eq!(x, y, "{what}: {fixed:?} → {generated:?}");
+        }
+    }
+}
+
+#[test]
+fn textured_roughness_is_the_rough_model_at_the_texture_value() {
+    let c = |v: f32| Texture::Constant(Rgb::splat(v));
+    // Constant textures: the nested model's own α is replaced.
+    let plain = rough_conductor(0.3, 0.1);
+    assert_same_bsdf(&textured(c(0.3), c(0.1), false, rough_conductor(0.7, 0.7)), &plain, Vec2::ZERO, "constant");
+    // pbrt's remapping: α = √roughness.
+    assert_same_bsdf(&textured(c(0.09), c(0.01), true, rough_conductor(0.7, 0.7)), &plain, Vec2::ZERO, "remapped");
+    // A checkerboard: each cell is the model at that cell's value.
+    let checks = |a: f32, b: f32| Texture::Checkerboard {
+        color0: Rgb::splat(a),
+        color1: Rgb::splat(b),
+        to_uv: UvTransform::IDENTITY,
+    };
+    let m = textured(checks(0.05, 0.3), checks(0.3, 0.05), false, rough_conductor(0.7, 0.7));
+    assert_same_bsdf(&m, &rough_conductor(0.05, 0.3), Vec2::new(0.2, 0.2), "checkerboard cell 0");
+    assert_same_bsdf(&m, &rough_conductor(0.3, 0.05), Vec2::new(0.7, 0.2), "checkerboard cell 1");
+    // The rough dielectric and the (isotropic, α_u) rough plastic.
+    let dielectric = |u: f32, v: f32| Material::RoughDielectric {
+        alpha_u: u,
+        alpha_v: v,
+        int_ior: 1.5,
+        ext_ior: 1.0,
+        specular_reflectance: c(1.0),
+        specular_transmittance: c(1.0),
+    };
+    assert_same_bsdf(
+        &textured(c(0.2), c(0.4), false, dielectric(0.9, 0.9)),
+        &dielectric(0.2, 0.4),
+        Vec2::ZERO,
+        "dielectric",
+    );
+    let plastic = |a: f32| Material::RoughPlastic {
+        alpha: a,
+        diffuse_reflectance: c(0.5),
+        specular_reflectance: c(1.0),
+        int_ior: 1.5,
+        ext_ior: 1.0,
+        nonlinear: false,
+    };
+    assert_same_bsdf(&textured(c(0.2), c(0.6), false, plastic(0.9)), &plastic(0.2), Vec2::ZERO, "plastic");
+    // A different α is told apart.
+    let point = ShadingPoint::flat(Vec3::Z);
+    let fixed = Vec3::new(0.3, 0.0, 0.95).normalize();
+    let generated = Vec3::new(-0.2, 0.1, 0.97).normalize();
+    let eval =
+        |m: &Material| Bsdf::new(m, &point, fixed, TransportMode::Radiance).unwrap().evaluate(generated).unwrap();
+    assert_ne!(eval(&textured(c(0.31), c(0.1), false, rough_conductor(0.3, 0.1))).value, eval(&plain).value);
+    // Only around a rough model.
+    assert!(textured(c(0.3), c(0.3), false, diffuse(0.5)).validate().unwrap_err().contains("rough"));
+}

@@ -929,6 +929,46 @@ impl Builder {
 
     // ----- materials ------------------------------------------------------------------------
 
+    /// Textured roughness: `Some((α_u, α_v textures, remap))` when `roughness`, `uroughness`
+    /// or `vroughness` names a non-constant texture (the others are taken as constants).
+    fn roughness_textures(&self, p: &ParamSet) -> Result<Option<(Texture, Texture, bool)>, SceneError> {
+        let textured = |name: &str| {
+            p.find(name).is_some_and(|x| {
+                x.ty == "texture"
+                    && matches!(&x.values[..], [Value::Str(t)]
+                        if self.textures.get(t).is_some_and(|n| n.texture.as_constant().is_none()))
+            })
+        };
+        if !["roughness", "uroughness", "vroughness"].iter().any(|n| textured(n)) {
+            return Ok(None);
+        }
+        let r = self.spectrum_texture(p, "roughness", Rgb::BLACK, false)?;
+        let u = if p.find("uroughness").is_some() {
+            self.spectrum_texture(p, "uroughness", Rgb::BLACK, false)?
+        } else {
+            r.clone()
+        };
+        let v =
+            if p.find("vroughness").is_some() { self.spectrum_texture(p, "vroughness", Rgb::BLACK, false)? } else { r };
+        Ok(Some((u, v, p.bool("remaproughness", true)?)))
+    }
+
+    /// `material(α_u, α_v)` with constant roughness, or wrapped in
+    /// [`Material::TexturedRoughness`] with textured roughness; `smooth` is the material for
+    /// constant α below [`SMOOTH_ALPHA`].
+    fn rough(
+        &self,
+        p: &ParamSet,
+        smooth: impl FnOnce() -> Material,
+        make: impl FnOnce(f32, f32) -> Material,
+    ) -> Result<Material, SceneError> {
+        if let Some((alpha_u, alpha_v, remap)) = self.roughness_textures(p)? {
+            return Ok(Material::TexturedRoughness { alpha_u, alpha_v, remap, nested: Box::new(make(0.1, 0.1)) });
+        }
+        let (alpha_u, alpha_v) = self.roughness(p)?;
+        Ok(if alpha_u.max(alpha_v) < SMOOTH_ALPHA { smooth() } else { make(alpha_u, alpha_v) })
+    }
+
     fn roughness(&self, p: &ParamSet) -> Result<(f32, f32), SceneError> {
         let r = self.constant_float(p, "roughness", 0.0)?;
         let u = if p.find("uroughness").is_some() { self.constant_float(p, "uroughness", r)? } else { r };
@@ -996,7 +1036,6 @@ impl Builder {
                 reflectance: self.spectrum_texture(p, "reflectance", Rgb::splat(0.5), true)?,
             }),
             "conductor" => {
-                let (alpha_u, alpha_v) = self.roughness(p)?;
                 let (eta, k, specular_reflectance) = if p.find("reflectance").is_some() {
                     for name in ["eta", "k"] {
                         if let Some(x) = p.find(name) {
@@ -1019,11 +1058,12 @@ impl Builder {
                     let k = self.unbounded(p, "k", "metal-Cu-k")?;
                     (eta, k, Texture::Constant(Rgb::WHITE))
                 };
-                let m = if alpha_u.max(alpha_v) < SMOOTH_ALPHA {
-                    Material::Conductor { eta, k, specular_reflectance }
-                } else {
-                    Material::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance }
-                };
+                let smooth_reflectance = specular_reflectance.clone();
+                let m = self.rough(
+                    p,
+                    || Material::Conductor { eta, k, specular_reflectance: smooth_reflectance },
+                    |alpha_u, alpha_v| Material::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance },
+                )?;
                 two_sided(m)
             }
             "dielectric" | "thindielectric" => {
@@ -1037,25 +1077,24 @@ impl Builder {
                         specular_transmittance: white(),
                     }
                 } else {
-                    let (alpha_u, alpha_v) = self.roughness(p)?;
-                    if alpha_u.max(alpha_v) < SMOOTH_ALPHA {
-                        Material::Dielectric {
+                    self.rough(
+                        p,
+                        || Material::Dielectric {
                             int_ior: eta,
                             ext_ior: 1.0,
                             specular_reflectance: white(),
                             specular_transmittance: white(),
                             dispersion: None,
-                        }
-                    } else {
-                        Material::RoughDielectric {
+                        },
+                        |alpha_u, alpha_v| Material::RoughDielectric {
                             alpha_u,
                             alpha_v,
                             int_ior: eta,
                             ext_ior: 1.0,
                             specular_reflectance: white(),
                             specular_transmittance: white(),
-                        }
-                    }
+                        },
+                    )?
                 }
             }
             "mix" => {

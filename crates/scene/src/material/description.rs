@@ -132,6 +132,21 @@ pub enum Material {
         /// Absorption and re-emission.
         fluorescence: Fluorescence,
     },
+    /// A rough model (`RoughConductor`, `RoughDielectric`, `RoughPlastic`) whose GGX roughness
+    /// varies over the surface: at a hit, α along the tangent is the luminance of `alpha_u` and
+    /// α along the bitangent that of `alpha_v` (square-rooted when `remap`, pbrt's
+    /// `RoughnessToAlpha`); the nested model's own α is not used. The plastic is isotropic and
+    /// takes `alpha_u`.
+    TexturedRoughness {
+        /// Roughness along the tangent.
+        alpha_u: Texture,
+        /// Roughness along the bitangent.
+        alpha_v: Texture,
+        /// The textures hold pbrt's `roughness`: α = √value.
+        remap: bool,
+        /// The rough model.
+        nested: Box<Material>,
+    },
     /// Mitsuba's `normalmap`: `nested` with its shading normal read from a tangent-space
     /// normal map (see `material/normal_map.rs`). Only as the outermost material.
     NormalMap {
@@ -230,6 +245,28 @@ impl Material {
         }
     }
 
+    /// Every [`Material::TexturedRoughness`] (at any depth) wraps a rough model.
+    fn check_textured_roughness(&self) -> Result<(), String> {
+        match self {
+            Material::TexturedRoughness { nested, .. } => match **nested {
+                Material::RoughConductor { .. } | Material::RoughDielectric { .. } | Material::RoughPlastic { .. } => {
+                    Ok(())
+                }
+                _ => Err("a textured roughness needs a rough conductor, dielectric or plastic".into()),
+            },
+            Material::Blend { first, second, .. } => {
+                first.check_textured_roughness()?;
+                second.check_textured_roughness()
+            }
+            Material::TwoSided { front, back } => {
+                front.check_textured_roughness()?;
+                back.as_ref().map_or(Ok(()), |b| b.check_textured_roughness())
+            }
+            Material::NormalMap { nested, .. } | Material::BumpMap { nested, .. } => nested.check_textured_roughness(),
+            _ => Ok(()),
+        }
+    }
+
     /// Checks what a BSDF can represent: at most [`MAX_COMPONENTS`] leaves per side, fluorescent
     /// materials only at the top level and conserving energy, normal and bump maps only as the
     /// outermost material.
@@ -247,6 +284,7 @@ impl Material {
         {
             return Err("a normalmap or bumpmap cannot wrap the reference material (it has no shading normal)".into());
         }
+        self.check_textured_roughness()?;
         if let Material::Fluorescent { reflectance, fluorescence } = self {
             fluorescence.check_energy(reflectance.max_value().max_component())?;
         }

@@ -101,14 +101,21 @@ macro_rules! each_model {
 
 impl Model {
     /// The leaf model of a non-blend, non-two-sided material with its textures at `uv`, at the
-    /// hero wavelength `hero` (nm) in spectral mode.
-    pub(super) fn from_leaf(material: &Material, uv: Vec2, hero: Option<f32>) -> Option<Model> {
+    /// hero wavelength `hero` (nm) in spectral mode; `alpha` replaces a rough model's
+    /// `(α_u, α_v)` (textured roughness).
+    pub(super) fn from_leaf(
+        material: &Material,
+        uv: Vec2,
+        hero: Option<f32>,
+        alpha: Option<(f32, f32)>,
+    ) -> Option<Model> {
         let model = match material {
             Material::Reference(_)
             | Material::Blend { .. }
             | Material::TwoSided { .. }
             | Material::NormalMap { .. }
-            | Material::BumpMap { .. } => return None,
+            | Material::BumpMap { .. }
+            | Material::TexturedRoughness { .. } => return None,
             Material::Diffuse { reflectance } => Model::Diffuse(Diffuse { reflectance: reflectance.eval(uv) }),
             // Unit reflectance: the integrators apply the diagonal reflectance and the
             // re-emission themselves.
@@ -117,7 +124,8 @@ impl Model {
                 Model::Conductor(Conductor { eta: *eta, k: *k, specular: specular_reflectance.eval(uv) })
             }
             Material::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance } => {
-                Model::RoughConductor(RoughConductor::new(*alpha_u, *alpha_v, *eta, *k, specular_reflectance.eval(uv)))
+                let (alpha_u, alpha_v) = alpha.unwrap_or((*alpha_u, *alpha_v));
+                Model::RoughConductor(RoughConductor::new(alpha_u, alpha_v, *eta, *k, specular_reflectance.eval(uv)))
             }
             Material::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance, dispersion } => {
                 Model::Dielectric(Dielectric::new(
@@ -145,8 +153,8 @@ impl Model {
                 specular_reflectance,
                 specular_transmittance,
             } => Model::RoughDielectric(RoughDielectric::new(
-                *alpha_u,
-                *alpha_v,
+                alpha.map_or(*alpha_u, |a| a.0),
+                alpha.map_or(*alpha_v, |a| a.1),
                 *int_ior,
                 *ext_ior,
                 specular_reflectance.eval(uv),
@@ -162,14 +170,14 @@ impl Model {
                 ))
             }
             Material::RoughPlastic {
-                alpha,
+                alpha: alpha_plastic,
                 diffuse_reflectance,
                 specular_reflectance,
                 int_ior,
                 ext_ior,
                 nonlinear,
             } => Model::RoughPlastic(RoughPlastic::new(
-                *alpha,
+                alpha.map_or(*alpha_plastic, |a| a.0),
                 diffuse_reflectance.eval(uv),
                 specular_reflectance.eval(uv),
                 *int_ior,

@@ -175,14 +175,24 @@ impl ModelBsdf {
             Material::NormalMap { nested, .. } | Material::BumpMap { nested, .. } => {
                 self.add(nested, uv, scale, side, hero);
             }
-            leaf => {
-                if self.count < MAX_COMPONENTS
-                    && let Some(model) = Model::from_leaf(leaf, uv, hero)
-                {
-                    self.components[self.count] = Component { model, scale, probability: 0.0, side, lobes: [0.0; 2] };
-                    self.count += 1;
-                }
+            Material::TexturedRoughness { alpha_u, alpha_v, remap, nested } => {
+                let alpha = |t: &crate::texture::Texture| {
+                    let a = t.eval(uv).luminance().max(0.0);
+                    if *remap { a.sqrt() } else { a }
+                };
+                self.push(Model::from_leaf(nested, uv, hero, Some((alpha(alpha_u), alpha(alpha_v)))), scale, side);
             }
+            leaf => self.push(Model::from_leaf(leaf, uv, hero, None), scale, side),
+        }
+    }
+
+    /// Adds a leaf model (if any) with blend weight `scale`, on side `side`.
+    fn push(&mut self, model: Option<Model>, scale: f32, side: f32) {
+        if self.count < MAX_COMPONENTS
+            && let Some(model) = model
+        {
+            self.components[self.count] = Component { model, scale, probability: 0.0, side, lobes: [0.0; 2] };
+            self.count += 1;
         }
     }
 
