@@ -55,6 +55,11 @@ const RHO: f64 = 0.5;
 /// A camera 5 units above a 20 × 20 Lambertian plane (reflectance [`RHO`]) under a unit
 /// constant sky; `bsdf` wraps the diffuse BSDF (`{}` is replaced by it).
 fn plane_scene(wrapper: &str) -> String {
+    plane_scene_scaled(wrapper, 10.0)
+}
+
+/// [`plane_scene`] with the plane `2 · half_width` wide (the camera sees its central 2.68 units).
+fn plane_scene_scaled(wrapper: &str, half_width: f64) -> String {
     let diffuse = format!(r#"<bsdf type="diffuse"><rgb name="reflectance" value="{RHO}"/></bsdf>"#);
     let bsdf = if wrapper.is_empty() { diffuse } else { wrapper.replace("{}", &diffuse) };
     format!(
@@ -66,7 +71,7 @@ fn plane_scene(wrapper: &str) -> String {
         </sensor>
         <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
         <shape type="rectangle">
-            <transform name="to_world"><scale value="10"/></transform>
+            <transform name="to_world"><scale value="{half_width}"/></transform>
             {bsdf}
         </shape>"#
     )
@@ -74,9 +79,14 @@ fn plane_scene(wrapper: &str) -> String {
 
 /// Path-traced frames of `description`: per-iteration image means and the final frame.
 fn render(description: &SceneDescription, iterations: u64) -> (MeanVar, Vec<f32>) {
+    render_with(description, iterations, "pt")
+}
+
+/// [`render`] with the algorithm `algorithm`.
+fn render_with(description: &SceneDescription, iterations: u64, algorithm: &str) -> (MeanVar, Vec<f32>) {
     let (scene, _) = Scene::from_description(description, None).unwrap();
     let settings = RenderSettings {
-        algorithm: Algorithm::from_name("pt").unwrap(),
+        algorithm: Algorithm::from_name(algorithm).unwrap(),
         budget: Budget::Iterations(iterations),
         max_length: 2,
         seed: 5,
@@ -308,5 +318,26 @@ Shape "sphere"
             assert!(matches!(**nested, Material::RoughDielectric { .. }), "{nested:?}");
         }
         m => panic!("{m:?}"),
+    }
+}
+
+/// Light sub-paths see the perturbed normal too (it is the hit's shading normal, stored in the
+/// light vertices, with the adjoint shading-normal factor): light tracing, BPT and VCM render
+/// the normal-mapped plane's `ρ (1 + cos a)/2` as the path tracer does.
+#[test]
+fn light_paths_see_the_normal_map() {
+    let a = 0.9;
+    // A plane just larger than the view, so that most light sub-paths land where the camera
+    // looks.
+    let description = load_ok(&plane_scene_scaled(&tilted_normal_map(a), 1.5));
+    let algorithms = ["lt", "bpt", "vcm"];
+    let alpha = sidak(1e-4, algorithms.len());
+    for algorithm in algorithms {
+        let (stats, _) = render_with(&description, 64, algorithm);
+        let (mean, se) = (stats.mean(), stats.std_error());
+        let p = z_test_p(mean - sky_view(a), se);
+        assert!(p > alpha, "{algorithm}: {mean} ± {se} vs {} (p = {p:.2e})", sky_view(a));
+        let p_flat = z_test_p(mean - RHO, se);
+        assert!(p_flat < 1e-6, "{algorithm}: {mean} ± {se}, not distinguishable from the untilted plane");
     }
 }
