@@ -194,8 +194,9 @@ impl Scene {
             }
             (Shape::Disk(d), _) => uv = d.uv_at(position),
         }
-        let material = &self.materials[primitive.material as usize];
-        if material.perturbs_shading_normal() {
+        if let Some(material) = self.materials.get(primitive.material as usize)
+            && material.perturbs_shading_normal()
+        {
             shading_normal = self.perturbed_normal(material, primitive, position, normal, shading_normal, uv);
         }
         Some(SurfaceHit {
