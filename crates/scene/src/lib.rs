@@ -15,6 +15,7 @@ pub mod material;
 pub mod microfacet;
 pub mod scene;
 pub mod shape;
+pub mod tangent;
 pub mod texture;
 
 pub use camera::Camera;

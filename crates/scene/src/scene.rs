@@ -7,8 +7,9 @@ use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::desc::EmissionSpectrum;
 use crate::light::{BoundingSphere, Light};
-use crate::material::{Material, ShadingPoint};
+use crate::material::{Material, ShadingPoint, SurfaceTangents};
 use crate::shape::Shape;
+use crate::tangent;
 use spectrum::{Rgb, SpectralMode};
 
 /// A shape with the index of its material and, if it emits, of its light.
@@ -193,6 +194,11 @@ impl Scene {
             }
             (Shape::Disk(d), _) => uv = d.uv_at(position),
         }
+        if let Some(material) = self.materials.get(primitive.material as usize)
+            && material.perturbs_shading_normal()
+        {
+            shading_normal = self.perturbed_normal(material, primitive, position, normal, shading_normal, uv);
+        }
         Some(SurfaceHit {
             position,
             normal,
@@ -203,6 +209,27 @@ impl Scene {
             material: primitive.material,
             light: primitive.light,
         })
+    }
+
+    /// The shading normal of a normal- or bump-mapped `material` at a hit (see
+    /// `material/perturb.rs`), with the hit's ∂p/∂u and ∂p/∂v from [`crate::tangent`].
+    #[inline(never)]
+    fn perturbed_normal(
+        &self,
+        material: &Material,
+        primitive: &Primitive,
+        position: Vec3,
+        geometric_normal: Vec3,
+        shading_normal: Vec3,
+        uv: Vec2,
+    ) -> Vec3 {
+        let (dp_du, dp_dv) = match (&primitive.shape, self.attributes.get(primitive.attributes as usize)) {
+            (Shape::Triangle(t), Some(SurfaceAttributes::Triangle { uvs, .. })) => tangent::triangle(t, *uvs),
+            (Shape::Triangle(t), _) => tangent::triangle(t, None),
+            (Shape::Sphere(s), _) => tangent::sphere(s, position),
+            (Shape::Disk(_), _) => tangent::fallback(geometric_normal),
+        };
+        material.perturbed_shading_normal(&SurfaceTangents { geometric_normal, shading_normal, uv, dp_du, dp_dv })
     }
 
     /// True when something blocks the segment from `point` along unit `direction` over the

@@ -172,9 +172,9 @@ impl<'a> Loader<'a> {
     }
 
     /// GGX roughness `(alpha_u, alpha_v)`: `alpha`, or both `alpha_u` and `alpha_v`; default
-    /// 0.1. A Beckmann distribution (Mitsuba's default) is approximated by GGX with the same
-    /// alpha, with a warning.
-    fn roughness(&mut self, p: &Plugin<'a>, anisotropic: bool) -> Result<(f32, f32), SceneError> {
+    /// 0.1, each a number or a texture (then [`Roughness::Textured`]). A Beckmann distribution
+    /// (Mitsuba's default) is approximated by GGX with the same alpha, with a warning.
+    fn roughness(&mut self, p: &Plugin<'a>, anisotropic: bool) -> Result<Roughness, SceneError> {
         let distribution = p.string("distribution")?.map(str::to_ascii_lowercase);
         match distribution.as_deref() {
             Some("ggx") => {}
@@ -193,26 +193,28 @@ impl<'a> Loader<'a> {
                 Err(p.error(format!("'{name}' must be a non-negative number, got {v}")))
             }
         };
-        // A textured roughness: an error, or its mean in a permissive load.
-        let mut value = |name: &str| -> Result<Option<f64>, SceneError> {
-            match self.untextured(p, name)? {
-                Some(mean) => Ok(Some(f64::from(mean.r))),
-                None => p.float(name),
-            }
-        };
-        let (alpha, alpha_u, alpha_v) = (value("alpha")?, value("alpha_u")?, value("alpha_v")?);
-        let (has_u, has_v) = (alpha_u.is_some(), alpha_v.is_some());
-        if has_u || has_v {
+        let textured = |name: &str| p.objects.iter().any(|o| o.name.as_deref() == Some(name));
+        let given = |name: &str| p.has(name) || textured(name);
+        let (has_u, has_v, has_alpha) = (given("alpha_u"), given("alpha_v"), given("alpha"));
+        let names: &[&str] = if has_u || has_v {
             if !anisotropic {
                 return Err(p.error("anisotropic roughness (alpha_u, alpha_v) is not supported by this plugin"));
             }
-            let (Some(u), Some(v), None) = (alpha_u, alpha_v, alpha) else {
+            if !(has_u && has_v && !has_alpha) {
                 return Err(p.error("give either 'alpha' or both 'alpha_u' and 'alpha_v'"));
-            };
-            return Ok((check(u, "alpha_u")?, check(v, "alpha_v")?));
+            }
+            &["alpha_u", "alpha_v"]
+        } else {
+            &["alpha", "alpha"]
+        };
+        if names.iter().any(|n| textured(n)) {
+            let mut texture = |name: &str| self.texture_prop(p, name, 0.1, SpectrumUse::Unbounded);
+            let alpha_u = texture(names[0])?;
+            let alpha_v = if names[1] == names[0] { alpha_u.clone() } else { texture(names[1])? };
+            return Ok(Roughness::Textured(alpha_u, alpha_v));
         }
-        let a = check(alpha.unwrap_or(0.1), "alpha")?;
-        Ok((a, a))
+        let value = |name: &str| -> Result<f32, SceneError> { check(p.float(name)?.unwrap_or(0.1), name) };
+        Ok(Roughness::Constant(value(names[0])?, value(names[1])?))
     }
 
     /// A texture-valued property: a nested `<texture>`, a `<ref name=… id=…>` to one, a
@@ -284,6 +286,14 @@ impl<'a> Loader<'a> {
                 let color1 = color(self, "color1", 0.2)?;
                 Texture::Checkerboard { color0, color1, to_uv }
             }
+            // Mitsuba's constant texture of raw (unconverted) values.
+            "rawconstant" => {
+                let value = match p.vector("value") {
+                    Ok(Some(v)) => v,
+                    _ => [p.float_required("value")?; 3],
+                };
+                Texture::Constant(rgb(value))
+            }
             other => return Err(p.error(format!("unsupported texture type '{other}'"))),
         };
         p.finish(&mut self.warnings);
@@ -339,10 +349,16 @@ impl<'a> Loader<'a> {
                 };
                 let specular_reflectance = self.texture_prop(&p, "specular_reflectance", 1.0, reflectance)?;
                 if rough {
-                    let (alpha_u, alpha_v) = self.roughness(&p, true)?;
+                    let roughness = self.roughness(&p, true)?;
                     // Without a material Mitsuba uses eta = 0, k = 1: a Fresnel factor of 1.
                     let (eta, k) = ior.unwrap_or((Rgb::BLACK, Rgb::WHITE));
-                    Material::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance }
+                    roughness.apply(|alpha_u, alpha_v| Material::RoughConductor {
+                        alpha_u,
+                        alpha_v,
+                        eta,
+                        k,
+                        specular_reflectance,
+                    })
                 } else {
                     match ior {
                         Some((eta, k)) => Material::Conductor { eta, k, specular_reflectance },
@@ -371,17 +387,14 @@ impl<'a> Loader<'a> {
                     "thindielectric" => {
                         Material::ThinDielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance }
                     }
-                    _ => {
-                        let (alpha_u, alpha_v) = self.roughness(&p, true)?;
-                        Material::RoughDielectric {
-                            alpha_u,
-                            alpha_v,
-                            int_ior,
-                            ext_ior,
-                            specular_reflectance,
-                            specular_transmittance,
-                        }
-                    }
+                    _ => self.roughness(&p, true)?.apply(|alpha_u, alpha_v| Material::RoughDielectric {
+                        alpha_u,
+                        alpha_v,
+                        int_ior,
+                        ext_ior,
+                        specular_reflectance,
+                        specular_transmittance,
+                    }),
                 }
             }
             "plastic" | "roughplastic" => {
@@ -392,15 +405,14 @@ impl<'a> Loader<'a> {
                 if p.ty == "plastic" {
                     Material::Plastic { diffuse_reflectance, specular_reflectance, int_ior, ext_ior, nonlinear }
                 } else {
-                    let (alpha, _) = self.roughness(&p, false)?;
-                    Material::RoughPlastic {
+                    self.roughness(&p, false)?.apply(|alpha, _| Material::RoughPlastic {
                         alpha,
                         diffuse_reflectance,
                         specular_reflectance,
                         int_ior,
                         ext_ior,
                         nonlinear,
-                    }
+                    })
                 }
             }
             "blendbsdf" => {
@@ -409,13 +421,16 @@ impl<'a> Loader<'a> {
                 }
                 let weight = self.texture_prop(&p, "weight", 0.5, reflectance)?;
                 let nested = self.nested_bsdfs(&p)?;
+                outermost_maps(&p, &nested)?;
                 let [first, second]: [Material; 2] = nested.try_into().map_err(|v: Vec<Material>| {
                     p.error(format!("needs exactly two nested BSDFs, found {}", v.len()))
                 })?;
                 Material::Blend { weight, first: Box::new(first), second: Box::new(second) }
             }
             "twosided" => {
-                let mut nested = self.nested_bsdfs(&p)?.into_iter();
+                let nested = self.nested_bsdfs(&p)?;
+                outermost_maps(&p, &nested)?;
+                let mut nested = nested.into_iter();
                 match (nested.next(), nested.next(), nested.next()) {
                     (Some(front), back, None) => {
                         Material::TwoSided { front: Box::new(front), back: back.map(Box::new) }
@@ -424,6 +439,7 @@ impl<'a> Loader<'a> {
                 }
             }
             "fluorescent" => self.fluorescent(&p)?,
+            "normalmap" | "bumpmap" => self.perturbing(&p)?,
             other => return Err(p.error(format!("unsupported bsdf type '{other}'"))),
         };
         p.ignore(&["sample_visible"]);
@@ -451,6 +467,43 @@ impl<'a> Loader<'a> {
         let quantum_yield = p.float_or("quantum_yield", 1.0)? as f32;
         let fluorescence = Fluorescence::new(peak, absorption, emission, quantum_yield).map_err(|e| p.error(e))?;
         let material = Material::Fluorescent { reflectance, fluorescence };
+        material.validate().map_err(|e| p.error(e))?;
+        Ok(material)
+    }
+
+    /// `<bsdf type="normalmap">` (a texture `normalmap` of tangent-space normals, raw data) or
+    /// `<bsdf type="bumpmap">` (one nested texture of any name, its luminance the height, and
+    /// `scale`, default 1), each around exactly one nested BSDF. They must be the outermost
+    /// BSDF of a shape.
+    fn perturbing(&mut self, p: &Plugin<'a>) -> Result<Material, SceneError> {
+        let texture = if p.ty == "normalmap" {
+            if p.named_object("normalmap").is_none() && !p.has("normalmap") {
+                return Err(p.error("missing the texture 'normalmap'"));
+            }
+            self.texture_prop(p, "normalmap", 0.5, SpectrumUse::Unbounded)?
+        } else {
+            let object = p
+                .objects
+                .iter()
+                .find(|o| !o.is_taken() && (o.node.tag == "texture" || o.node.tag == "ref") && o.name.is_some())
+                .ok_or_else(|| p.error("missing the height texture (a nested <texture>)"))?;
+            let name = object.name.clone().unwrap_or_default();
+            self.texture_prop(p, &name, 0.0, SpectrumUse::Unbounded)?
+        };
+        let mut nested = self.nested_bsdfs(p)?.into_iter();
+        let (Some(nested), None) = (nested.next(), nested.next()) else {
+            return Err(p.error("needs exactly one nested BSDF"));
+        };
+        let nested = Box::new(nested);
+        let material = if p.ty == "normalmap" {
+            Material::NormalMap { normals: texture, nested }
+        } else {
+            let scale = p.float_or("scale", 1.0)?;
+            if !scale.is_finite() {
+                return Err(p.error(format!("'scale' must be a finite number, got {scale}")));
+            }
+            Material::BumpMap { height: texture, scale: scale as f32, nested }
+        };
         material.validate().map_err(|e| p.error(e))?;
         Ok(material)
     }
@@ -483,6 +536,35 @@ impl<'a> Loader<'a> {
         }
         Ok(out)
     }
+}
+
+/// A rough material's GGX α: numbers, or textures evaluated at each hit.
+enum Roughness {
+    /// `(α_u, α_v)`.
+    Constant(f32, f32),
+    /// `(α_u, α_v)` textures.
+    Textured(Texture, Texture),
+}
+
+impl Roughness {
+    /// The rough material `make(α_u, α_v)`, wrapped in [`Material::TexturedRoughness`] when
+    /// the roughness is textured (its own α is then unused).
+    fn apply(self, make: impl FnOnce(f32, f32) -> Material) -> Material {
+        match self {
+            Roughness::Constant(u, v) => make(u, v),
+            Roughness::Textured(alpha_u, alpha_v) => {
+                Material::TexturedRoughness { alpha_u, alpha_v, remap: false, nested: Box::new(make(0.1, 0.1)) }
+            }
+        }
+    }
+}
+
+/// An error when a normal or bump map is nested in `p` (they must be the outermost BSDF).
+fn outermost_maps(p: &Plugin, nested: &[Material]) -> Result<(), SceneError> {
+    if nested.iter().any(Material::perturbs_shading_normal) {
+        return Err(p.error("a normalmap or bumpmap must be the outermost bsdf (wrap the blend or twosided in it)"));
+    }
+    Ok(())
 }
 
 /// The 2D affine part of a 4×4 `to_uv` transform (as Mitsuba reduces it).

@@ -33,6 +33,11 @@
 //! - **Roughness.** With `remaproughness` true (the default) α = √roughness (pbrt-v4's
 //!   `RoughnessToAlpha`), else α = roughness. Below α = 10⁻³ on both axes the surface is smooth,
 //!   as in pbrt.
+//! - **Normal and bump maps.** A material's `string normalmap` becomes
+//!   [`Material::NormalMap`] (the image read linear, looked up at (u, 1 − v)) and its
+//!   `texture displacement` a [`Material::BumpMap`] with scale 1 (the exact gradient instead of
+//!   pbrt's finite difference; pbrt's `displacement · ∂n/∂u` term is omitted). Both at once is
+//!   an error.
 //! - **Mix.** pbrt's `mix` picks `materials[1]` with probability `amount`; the expectation is our
 //!   [`Material::Blend`] with weight `amount`.
 //! - **Image environment maps** are resampled from pbrt's equal-area octahedral square to
@@ -924,6 +929,46 @@ impl Builder {
 
     // ----- materials ------------------------------------------------------------------------
 
+    /// Textured roughness: `Some((α_u, α_v textures, remap))` when `roughness`, `uroughness`
+    /// or `vroughness` names a non-constant texture (the others are taken as constants).
+    fn roughness_textures(&self, p: &ParamSet) -> Result<Option<(Texture, Texture, bool)>, SceneError> {
+        let textured = |name: &str| {
+            p.find(name).is_some_and(|x| {
+                x.ty == "texture"
+                    && matches!(&x.values[..], [Value::Str(t)]
+                        if self.textures.get(t).is_some_and(|n| n.texture.as_constant().is_none()))
+            })
+        };
+        if !["roughness", "uroughness", "vroughness"].iter().any(|n| textured(n)) {
+            return Ok(None);
+        }
+        let r = self.spectrum_texture(p, "roughness", Rgb::BLACK, false)?;
+        let u = if p.find("uroughness").is_some() {
+            self.spectrum_texture(p, "uroughness", Rgb::BLACK, false)?
+        } else {
+            r.clone()
+        };
+        let v =
+            if p.find("vroughness").is_some() { self.spectrum_texture(p, "vroughness", Rgb::BLACK, false)? } else { r };
+        Ok(Some((u, v, p.bool("remaproughness", true)?)))
+    }
+
+    /// `material(α_u, α_v)` with constant roughness, or wrapped in
+    /// [`Material::TexturedRoughness`] with textured roughness; `smooth` is the material for
+    /// constant α below [`SMOOTH_ALPHA`].
+    fn rough(
+        &self,
+        p: &ParamSet,
+        smooth: impl FnOnce() -> Material,
+        make: impl FnOnce(f32, f32) -> Material,
+    ) -> Result<Material, SceneError> {
+        if let Some((alpha_u, alpha_v, remap)) = self.roughness_textures(p)? {
+            return Ok(Material::TexturedRoughness { alpha_u, alpha_v, remap, nested: Box::new(make(0.1, 0.1)) });
+        }
+        let (alpha_u, alpha_v) = self.roughness(p)?;
+        Ok(if alpha_u.max(alpha_v) < SMOOTH_ALPHA { smooth() } else { make(alpha_u, alpha_v) })
+    }
+
     fn roughness(&self, p: &ParamSet) -> Result<(f32, f32), SceneError> {
         let r = self.constant_float(p, "roughness", 0.0)?;
         let u = if p.find("uroughness").is_some() { self.constant_float(p, "uroughness", r)? } else { r };
@@ -938,6 +983,52 @@ impl Builder {
     }
 
     fn material(&self, file: &Path, d: &Directive, ty: &str) -> Result<Material, SceneError> {
+        let material = self.base_material(file, d, ty)?;
+        if ty == "mix" { Ok(material) } else { self.perturbation(file, d, material) }
+    }
+
+    /// pbrt-v4's `string normalmap` (an image of tangent-space normals, read linear, looked up
+    /// at (u, 1 − v) with repeat and bilinear filtering) or `float texture displacement` (a
+    /// bump map: the gradient of the displacement tilts the shading normal; pbrt's finite
+    /// difference is replaced by the exact gradient and its `displace · ∂n/∂u` term is
+    /// omitted) around `material`.
+    fn perturbation(&self, file: &Path, d: &Directive, material: Material) -> Result<Material, SceneError> {
+        let p = &d.params;
+        let normal_map = p.string("normalmap")?;
+        let displacement = p.find("displacement").map(|x| x.pos);
+        let nested = Box::new(material.clone());
+        let wrapped = match (normal_map, displacement) {
+            (None, None) => return Ok(material),
+            (Some((_, pos)), Some(_)) => {
+                return Err(p.error(pos, "give either \"normalmap\" or \"displacement\", not both"));
+            }
+            (Some((filename, pos)), None) => {
+                let path = resolve(file, &filename);
+                let stored = crate::read_texture_file(&path)
+                    .map_err(|e| p.error(pos, format!("cannot read normal map: {e}")))?;
+                let image = stored.linear(crate::TextureEncoding::Linear);
+                let pixels = image.pixels.iter().map(|&c| Rgb::from_array(c)).collect();
+                let image = Arc::new(TextureImage { width: image.width as u32, height: image.height as u32, pixels });
+                // (u, 1 − v): v = 0 is the bottom row; our v' runs from the top.
+                let to_uv = UvTransform {
+                    columns: [Vec2::new(1.0, 0.0), Vec2::new(0.0, -1.0)],
+                    translation: Vec2::new(0.0, 1.0),
+                };
+                let normals =
+                    Texture::bitmap(image, to_uv, Sampling { wrap: WrapMode::Repeat, filter: FilterMode::Bilinear });
+                Material::NormalMap { normals, nested }
+            }
+            (None, Some(_)) => {
+                let height = self.spectrum_texture(p, "displacement", Rgb::BLACK, false)?;
+                Material::BumpMap { height, scale: 1.0, nested }
+            }
+        };
+        let pos = p.params.first().map_or(d.pos, |x| x.pos);
+        wrapped.validate().map_err(|e| p.error(pos, e))?;
+        Ok(wrapped)
+    }
+
+    fn base_material(&self, file: &Path, d: &Directive, ty: &str) -> Result<Material, SceneError> {
         let p = &d.params;
         let two_sided = |m: Material| Material::TwoSided { front: Box::new(m), back: None };
         Ok(match ty {
@@ -945,7 +1036,6 @@ impl Builder {
                 reflectance: self.spectrum_texture(p, "reflectance", Rgb::splat(0.5), true)?,
             }),
             "conductor" => {
-                let (alpha_u, alpha_v) = self.roughness(p)?;
                 let (eta, k, specular_reflectance) = if p.find("reflectance").is_some() {
                     for name in ["eta", "k"] {
                         if let Some(x) = p.find(name) {
@@ -968,11 +1058,12 @@ impl Builder {
                     let k = self.unbounded(p, "k", "metal-Cu-k")?;
                     (eta, k, Texture::Constant(Rgb::WHITE))
                 };
-                let m = if alpha_u.max(alpha_v) < SMOOTH_ALPHA {
-                    Material::Conductor { eta, k, specular_reflectance }
-                } else {
-                    Material::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance }
-                };
+                let smooth_reflectance = specular_reflectance.clone();
+                let m = self.rough(
+                    p,
+                    || Material::Conductor { eta, k, specular_reflectance: smooth_reflectance },
+                    |alpha_u, alpha_v| Material::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance },
+                )?;
                 two_sided(m)
             }
             "dielectric" | "thindielectric" => {
@@ -986,25 +1077,24 @@ impl Builder {
                         specular_transmittance: white(),
                     }
                 } else {
-                    let (alpha_u, alpha_v) = self.roughness(p)?;
-                    if alpha_u.max(alpha_v) < SMOOTH_ALPHA {
-                        Material::Dielectric {
+                    self.rough(
+                        p,
+                        || Material::Dielectric {
                             int_ior: eta,
                             ext_ior: 1.0,
                             specular_reflectance: white(),
                             specular_transmittance: white(),
                             dispersion: None,
-                        }
-                    } else {
-                        Material::RoughDielectric {
+                        },
+                        |alpha_u, alpha_v| Material::RoughDielectric {
                             alpha_u,
                             alpha_v,
                             int_ior: eta,
                             ext_ior: 1.0,
                             specular_reflectance: white(),
                             specular_transmittance: white(),
-                        }
-                    }
+                        },
+                    )?
                 }
             }
             "mix" => {

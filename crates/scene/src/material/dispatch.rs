@@ -1,0 +1,251 @@
+//! The closed set of leaf scattering models and the one place that dispatches to them.
+//!
+//! Every model implements [`LeafModel`] in its own file; [`Model`] is the enum over them and
+//! [`Model::from_leaf`] maps a [`Material`] to its model with the textures evaluated. Adding a
+//! model is one new file, one arm in [`Model`], one line in `each_model!` and the `from_leaf`
+//! arm (plus the `Material` variant and the loader lines).
+
+use math::{Vec2, Vec3};
+use spectrum::Rgb;
+
+use super::conductor::Conductor;
+use super::description::Material;
+use super::dielectric::Dielectric;
+use super::diffuse::Diffuse;
+use super::lobe::{ModelEval, Sampled};
+use super::plastic::Plastic;
+use super::rough_conductor::RoughConductor;
+use super::rough_dielectric::RoughDielectric;
+use super::rough_plastic::RoughPlastic;
+use super::shading::TransportMode;
+use super::thin_dielectric::ThinDielectric;
+
+/// One leaf scattering model with its textures evaluated, in a local frame whose z axis is the
+/// (possibly flipped) shading normal. Every pdf is a solid-angle density (1/sr) of the local
+/// directions; lobe-selection probabilities are dimensionless.
+pub(super) trait LeafModel {
+    /// True for the models that scatter only from the front (`fixed.z > 0`). The dispatcher
+    /// never asks a one-sided model for the albedo or a sample from behind.
+    fn one_sided(&self) -> bool {
+        true
+    }
+
+    /// Whether lobe `lobe` (0 or 1) is a delta lobe.
+    fn lobe_is_delta(&self, lobe: usize) -> bool;
+
+    /// Selection probabilities of the (up to two) lobes when `w` is the fixed direction.
+    fn lobe_probabilities(&self, _w: Vec3) -> [f32; 2] {
+        [1.0, 0.0]
+    }
+
+    /// Weight of the model when a blend chooses among its components (direction independent):
+    /// the luminance of its largest reflectance factor.
+    fn selection_weight(&self) -> f32;
+
+    /// Per-channel albedo estimate for the fixed direction `w` (for Russian roulette).
+    fn albedo(&self, w: Vec3) -> Rgb;
+
+    /// The non-delta part for the local directions `fixed` and `generated`: the BSDF in the
+    /// shading frame (`f_s(fixed, generated)` in radiance mode, `f_s(generated, fixed)` in
+    /// importance mode), the solid-angle density of generating `generated` from `fixed` with
+    /// the lobe probabilities `p_fixed`, and that of generating `fixed` from `generated` with
+    /// `p_generated`.
+    fn evaluate(
+        &self,
+        fixed: Vec3,
+        generated: Vec3,
+        mode: TransportMode,
+        p_fixed: [f32; 2],
+        p_generated: [f32; 2],
+    ) -> ModelEval;
+
+    /// Samples lobe `lobe` for the local `fixed` direction with `u[0..2]` (direction) and
+    /// `u[2]` (any further discrete choice).
+    fn sample(&self, fixed: Vec3, lobe: usize, u: [f32; 3], mode: TransportMode) -> Option<Sampled>;
+
+    /// True when a delta sample continues at the hero wavelength only (dispersion).
+    fn dispersive(&self) -> bool {
+        false
+    }
+}
+
+/// A leaf scattering model (see [`LeafModel`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Model {
+    Diffuse(Diffuse),
+    Conductor(Conductor),
+    RoughConductor(RoughConductor),
+    Dielectric(Dielectric),
+    ThinDielectric(ThinDielectric),
+    RoughDielectric(RoughDielectric),
+    Plastic(Plastic),
+    RoughPlastic(RoughPlastic),
+}
+
+/// `each_model!(model, m => expression)`: evaluates the expression with `m` bound to the
+/// model inside whichever variant `model` is.
+macro_rules! each_model {
+    ($model:expr, $m:ident => $e:expr) => {
+        match $model {
+            Model::Diffuse($m) => $e,
+            Model::Conductor($m) => $e,
+            Model::RoughConductor($m) => $e,
+            Model::Dielectric($m) => $e,
+            Model::ThinDielectric($m) => $e,
+            Model::RoughDielectric($m) => $e,
+            Model::Plastic($m) => $e,
+            Model::RoughPlastic($m) => $e,
+        }
+    };
+}
+
+impl Model {
+    /// The leaf model of a non-blend, non-two-sided material with its textures at `uv`, at the
+    /// hero wavelength `hero` (nm) in spectral mode; `alpha` replaces a rough model's
+    /// `(α_u, α_v)` (textured roughness).
+    pub(super) fn from_leaf(
+        material: &Material,
+        uv: Vec2,
+        hero: Option<f32>,
+        alpha: Option<(f32, f32)>,
+    ) -> Option<Model> {
+        let model = match material {
+            Material::Reference(_)
+            | Material::Blend { .. }
+            | Material::TwoSided { .. }
+            | Material::NormalMap { .. }
+            | Material::BumpMap { .. }
+            | Material::TexturedRoughness { .. } => return None,
+            Material::Diffuse { reflectance } => Model::Diffuse(Diffuse { reflectance: reflectance.eval(uv) }),
+            // Unit reflectance: the integrators apply the diagonal reflectance and the
+            // re-emission themselves.
+            Material::Fluorescent { .. } => Model::Diffuse(Diffuse { reflectance: Rgb::WHITE }),
+            Material::Conductor { eta, k, specular_reflectance } => {
+                Model::Conductor(Conductor { eta: *eta, k: *k, specular: specular_reflectance.eval(uv) })
+            }
+            Material::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance } => {
+                let (alpha_u, alpha_v) = alpha.unwrap_or((*alpha_u, *alpha_v));
+                Model::RoughConductor(RoughConductor::new(alpha_u, alpha_v, *eta, *k, specular_reflectance.eval(uv)))
+            }
+            Material::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance, dispersion } => {
+                Model::Dielectric(Dielectric::new(
+                    *int_ior,
+                    *ext_ior,
+                    dispersion.as_ref(),
+                    hero,
+                    specular_reflectance.eval(uv),
+                    specular_transmittance.eval(uv),
+                ))
+            }
+            Material::ThinDielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance } => {
+                Model::ThinDielectric(ThinDielectric::new(
+                    *int_ior,
+                    *ext_ior,
+                    specular_reflectance.eval(uv),
+                    specular_transmittance.eval(uv),
+                ))
+            }
+            Material::RoughDielectric {
+                alpha_u,
+                alpha_v,
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Model::RoughDielectric(RoughDielectric::new(
+                alpha.map_or(*alpha_u, |a| a.0),
+                alpha.map_or(*alpha_v, |a| a.1),
+                *int_ior,
+                *ext_ior,
+                specular_reflectance.eval(uv),
+                specular_transmittance.eval(uv),
+            )),
+            Material::Plastic { diffuse_reflectance, specular_reflectance, int_ior, ext_ior, nonlinear } => {
+                Model::Plastic(Plastic::new(
+                    diffuse_reflectance.eval(uv),
+                    specular_reflectance.eval(uv),
+                    *int_ior,
+                    *ext_ior,
+                    *nonlinear,
+                ))
+            }
+            Material::RoughPlastic {
+                alpha: alpha_plastic,
+                diffuse_reflectance,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                nonlinear,
+            } => Model::RoughPlastic(RoughPlastic::new(
+                alpha.map_or(*alpha_plastic, |a| a.0),
+                diffuse_reflectance.eval(uv),
+                specular_reflectance.eval(uv),
+                *int_ior,
+                *ext_ior,
+                *nonlinear,
+            )),
+        };
+        Some(model)
+    }
+
+    /// See [`LeafModel::one_sided`].
+    #[inline]
+    pub(super) fn one_sided(&self) -> bool {
+        each_model!(self, m => m.one_sided())
+    }
+
+    /// See [`LeafModel::lobe_is_delta`].
+    #[inline]
+    pub(super) fn lobe_is_delta(&self, lobe: usize) -> bool {
+        each_model!(self, m => m.lobe_is_delta(lobe))
+    }
+
+    /// See [`LeafModel::lobe_probabilities`].
+    #[inline]
+    pub(super) fn lobe_probabilities(&self, w: Vec3) -> [f32; 2] {
+        each_model!(self, m => m.lobe_probabilities(w))
+    }
+
+    /// See [`LeafModel::selection_weight`] (never negative).
+    #[inline]
+    pub(super) fn selection_weight(&self) -> f32 {
+        each_model!(self, m => m.selection_weight()).max(0.0)
+    }
+
+    /// See [`LeafModel::albedo`]; black from behind a one-sided model.
+    #[inline]
+    pub(super) fn albedo(&self, w: Vec3) -> Rgb {
+        if self.one_sided() && w.z <= 0.0 {
+            return Rgb::BLACK;
+        }
+        each_model!(self, m => m.albedo(w))
+    }
+
+    /// See [`LeafModel::evaluate`].
+    #[inline]
+    pub(super) fn evaluate(
+        &self,
+        fixed: Vec3,
+        generated: Vec3,
+        mode: TransportMode,
+        p_fixed: [f32; 2],
+        p_generated: [f32; 2],
+    ) -> ModelEval {
+        each_model!(self, m => m.evaluate(fixed, generated, mode, p_fixed, p_generated))
+    }
+
+    /// See [`LeafModel::sample`]; `None` from behind a one-sided model.
+    #[inline]
+    pub(super) fn sample(&self, fixed: Vec3, lobe: usize, u: [f32; 3], mode: TransportMode) -> Option<Sampled> {
+        if self.one_sided() && fixed.z <= 0.0 {
+            return None;
+        }
+        each_model!(self, m => m.sample(fixed, lobe, u, mode))
+    }
+
+    /// See [`LeafModel::dispersive`].
+    #[inline]
+    pub(super) fn dispersive(&self) -> bool {
+        each_model!(self, m => m.dispersive())
+    }
+}

@@ -1,0 +1,330 @@
+//! The BSDF of every material but the reference one: a weighted sum of leaf models (more than
+//! one only for blends; two-sided materials pick a side), oriented by the shading normal. This
+//! layer owns the shading frame, the geometric/shading side tests and the shading-normal
+//! correction (see the module documentation of [`super`]), the component and lobe selection,
+//! and the Russian-roulette continuation probability (the largest channel of the blended
+//! albedo, at most 1). All pdfs it returns are solid-angle densities including the component
+//! and lobe selection probabilities; delta lobes report their selection probability.
+
+use math::{Frame, PdfW, Vec2, Vec3};
+use spectrum::Rgb;
+
+use super::MAX_COMPONENTS;
+use super::description::Material;
+use super::diffuse::Diffuse;
+use super::dispatch::Model;
+use super::lobe::Sampled;
+use super::query::{BsdfEval, BsdfSample, PdfPair};
+use super::shading::{ShadingPoint, TransportMode, consistent};
+
+/// The BSDF of every material but [`Material::Reference`]: a weighted sum of leaf models
+/// (more than one only for blends), oriented by the shading normal.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ModelBsdf {
+    /// Shading frame (z = shading normal, flipped to the side of the geometric normal).
+    frame: Frame,
+    /// Unit geometric normal (world).
+    geometric: Vec3,
+    /// Unit fixed direction (world).
+    pub(super) fixed: Vec3,
+    /// Fixed direction in the shading frame.
+    local_fixed: Vec3,
+    /// Signed cosine of the fixed direction with the geometric normal.
+    pub(super) cos_fixed_geometric: f32,
+    pub(super) mode: TransportMode,
+    /// Shading normal equal to the geometric normal: no shading-normal correction.
+    flat: bool,
+    pub(super) continuation: f32,
+    /// Total selection probability of the non-delta lobes.
+    pub(super) non_delta_probability: f32,
+    /// Total selection probability of the delta lobes.
+    pub(super) delta_probability: f32,
+    count: usize,
+    components: [Component; MAX_COMPONENTS],
+}
+
+/// One leaf material of a [`ModelBsdf`].
+#[derive(Clone, Copy, Debug)]
+struct Component {
+    model: Model,
+    /// Product of the blend weights on the way to this leaf.
+    scale: f32,
+    /// Probability of choosing this component when sampling (independent of the directions).
+    probability: f32,
+    /// 1, or −1 for the back side of a two-sided material (the local z axis is mirrored).
+    side: f32,
+    /// Selection probabilities of the model's lobes for the fixed direction (not including
+    /// `probability`).
+    lobes: [f32; 2],
+}
+
+impl Component {
+    /// Unnormalised probability of choosing this component when `w` (in the model's frame) is
+    /// the fixed direction: blend weight times the model's selection weight, 0 from behind a
+    /// one-sided model.
+    #[inline]
+    fn selection_weight(&self, w: Vec3) -> f32 {
+        if self.model.one_sided() && w.z <= 0.0 { 0.0 } else { self.scale * self.model.selection_weight() }
+    }
+
+    /// Shading-frame coordinates → the model's coordinates (and back: the map is its own
+    /// inverse).
+    #[inline]
+    fn orient(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.x, v.y, v.z * self.side)
+    }
+}
+
+impl ModelBsdf {
+    pub(super) fn new(
+        material: &Material,
+        point: &ShadingPoint,
+        fixed: Vec3,
+        mode: TransportMode,
+        hero: Option<f32>,
+    ) -> Option<ModelBsdf> {
+        let geometric = point.geometric_normal;
+        // The shading normal on the side of the geometric normal (a degenerate one is replaced
+        // by the geometric normal).
+        let mut shading = point.shading_normal;
+        let cos_normals = shading.dot(geometric);
+        if cos_normals.abs() < 1e-4 || cos_normals.is_nan() || !shading.is_finite() {
+            shading = geometric;
+        } else if cos_normals < 0.0 {
+            shading = -shading;
+        }
+        let flat = shading == geometric;
+        let frame = Frame::from_z(shading);
+        let cos_fixed_geometric = fixed.dot(geometric);
+        let local_fixed = frame.to_local(fixed);
+        if !consistent(cos_fixed_geometric, local_fixed.z) {
+            return None;
+        }
+        let empty = Component {
+            model: Model::Diffuse(Diffuse { reflectance: Rgb::BLACK }),
+            scale: 0.0,
+            probability: 0.0,
+            side: 1.0,
+            lobes: [0.0; 2],
+        };
+        let mut bsdf = ModelBsdf {
+            frame,
+            geometric,
+            fixed,
+            local_fixed,
+            cos_fixed_geometric,
+            mode,
+            flat,
+            continuation: 0.0,
+            non_delta_probability: 0.0,
+            delta_probability: 0.0,
+            count: 0,
+            components: [empty; MAX_COMPONENTS],
+        };
+        bsdf.add(material, point.uv, 1.0, 1.0, hero);
+
+        let mut total_weight = 0.0;
+        let mut albedo = Rgb::BLACK;
+        for c in &mut bsdf.components[..bsdf.count] {
+            let w = c.orient(local_fixed);
+            c.lobes = c.model.lobe_probabilities(w);
+            albedo += c.model.albedo(w) * c.scale;
+            c.probability = c.selection_weight(w);
+            total_weight += c.probability;
+        }
+        if !positive(total_weight) {
+            return None;
+        }
+        for c in &mut bsdf.components[..bsdf.count] {
+            c.probability /= total_weight;
+            for (i, p) in c.lobes.iter().enumerate() {
+                if c.model.lobe_is_delta(i) {
+                    bsdf.delta_probability += c.probability * p;
+                } else {
+                    bsdf.non_delta_probability += c.probability * p;
+                }
+            }
+        }
+        bsdf.continuation = albedo.max_component().min(1.0);
+        if !positive(bsdf.continuation) {
+            return None;
+        }
+        Some(bsdf)
+    }
+
+    /// Adds the leaves of `material` with blend weight `scale`, on side `side`.
+    fn add(&mut self, material: &Material, uv: Vec2, scale: f32, side: f32, hero: Option<f32>) {
+        if !positive(scale) {
+            return;
+        }
+        match material {
+            Material::Blend { weight, first, second } => {
+                let w = weight.eval(uv).r;
+                let w = if w.is_nan() { 0.0 } else { w.clamp(0.0, 1.0) };
+                self.add(first, uv, scale * (1.0 - w), side, hero);
+                self.add(second, uv, scale * w, side, hero);
+            }
+            Material::TwoSided { front, back } => {
+                if self.local_fixed.z * side < 0.0 {
+                    self.add(back.as_deref().unwrap_or(front), uv, scale, -side, hero);
+                } else {
+                    self.add(front, uv, scale, side, hero);
+                }
+            }
+            // The hit's shading normal is already perturbed (see `perturb.rs`).
+            Material::NormalMap { nested, .. } | Material::BumpMap { nested, .. } => {
+                self.add(nested, uv, scale, side, hero);
+            }
+            Material::TexturedRoughness { alpha_u, alpha_v, remap, nested } => {
+                let alpha = |t: &crate::texture::Texture| {
+                    let a = t.eval(uv).luminance().max(0.0);
+                    if *remap { a.sqrt() } else { a }
+                };
+                self.push(Model::from_leaf(nested, uv, hero, Some((alpha(alpha_u), alpha(alpha_v)))), scale, side);
+            }
+            leaf => self.push(Model::from_leaf(leaf, uv, hero, None), scale, side),
+        }
+    }
+
+    /// Adds a leaf model (if any) with blend weight `scale`, on side `side`.
+    fn push(&mut self, model: Option<Model>, scale: f32, side: f32) {
+        if self.count < MAX_COMPONENTS
+            && let Some(model) = model
+        {
+            self.components[self.count] = Component { model, scale, probability: 0.0, side, lobes: [0.0; 2] };
+            self.count += 1;
+        }
+    }
+
+    /// The factor that turns the shading-frame BSDF into the value in the geometric-normal
+    /// formulation, for a generated direction with shading cosine `cos_shading` and geometric
+    /// cosine `cos_geometric`.
+    #[inline]
+    fn shading_factor(&self, cos_shading: f32, cos_geometric: f32) -> f32 {
+        if self.flat {
+            return 1.0;
+        }
+        match self.mode {
+            TransportMode::Radiance => (cos_shading / cos_geometric).abs(),
+            TransportMode::Importance => (self.local_fixed.z / self.cos_fixed_geometric).abs(),
+        }
+    }
+
+    pub(super) fn evaluate(&self, generated: Vec3) -> Option<BsdfEval> {
+        if self.non_delta_probability <= 0.0 {
+            return None;
+        }
+        let cos_geometric = generated.dot(self.geometric);
+        let local = self.frame.to_local(generated);
+        if !consistent(cos_geometric, local.z) {
+            return None;
+        }
+        // Component probabilities when the generated direction is the fixed one (they differ
+        // from the stored ones only by the one-sided components, which do not scatter from
+        // behind).
+        let mut reverse_total = 0.0;
+        if self.count > 1 {
+            for c in &self.components[..self.count] {
+                reverse_total += c.selection_weight(c.orient(local));
+            }
+        }
+        let mut value = Rgb::BLACK;
+        let mut pdf = PdfPair::default();
+        for c in &self.components[..self.count] {
+            let fixed = c.orient(self.local_fixed);
+            let generated = c.orient(local);
+            let p_generated = c.model.lobe_probabilities(generated);
+            let e = c.model.evaluate(fixed, generated, self.mode, c.lobes, p_generated);
+            value += e.value * c.scale;
+            pdf.forward.0 += c.probability * e.forward;
+            let reverse_probability = if self.count == 1 {
+                1.0
+            } else if reverse_total > 0.0 {
+                c.selection_weight(generated) / reverse_total
+            } else {
+                0.0
+            };
+            pdf.reverse.0 += reverse_probability * e.reverse;
+        }
+        if value.is_black() || !value.is_finite() {
+            return None;
+        }
+        Some(BsdfEval {
+            value: value * self.shading_factor(local.z, cos_geometric),
+            cos_generated: cos_geometric.abs(),
+            pdf,
+        })
+    }
+
+    /// Samples a lobe (all lobes, or only the delta lobes when `specular_only`).
+    pub(super) fn sample(&self, u: [f32; 3], specular_only: bool) -> Option<BsdfSample> {
+        let total = if specular_only { self.delta_probability } else { 1.0 };
+        if !positive(total) {
+            return None;
+        }
+        // Walk the lobes with u[2]; keep the last candidate for rounding at the end.
+        let mut pick = u[2] * total;
+        let mut chosen = None;
+        'search: for (index, c) in self.components[..self.count].iter().enumerate() {
+            for (lobe, p) in c.lobes.iter().enumerate() {
+                let probability = c.probability * p;
+                if !positive(probability) || (specular_only && !c.model.lobe_is_delta(lobe)) {
+                    continue;
+                }
+                chosen = Some((index, lobe, probability, pick));
+                if pick < probability {
+                    break 'search;
+                }
+                pick -= probability;
+            }
+        }
+        let (index, lobe, probability, pick) = chosen?;
+        let c = &self.components[index];
+        let rescaled = (pick / probability).clamp(0.0, ONE_MINUS_EPSILON);
+        let sampled = c.model.sample(c.orient(self.local_fixed), lobe, [u[0], u[1], rescaled], self.mode)?;
+        match sampled {
+            Sampled::Lobe { direction, lobe } => {
+                let direction = self.frame.to_world(c.orient(direction)).normalize();
+                let eval = self.evaluate(direction)?;
+                if !positive(eval.pdf.forward.0) {
+                    return None;
+                }
+                Some(BsdfSample {
+                    direction,
+                    value: eval.value,
+                    cos_generated: eval.cos_generated,
+                    pdf: eval.pdf,
+                    lobe,
+                    dispersive: false,
+                })
+            }
+            Sampled::Delta { direction, rho, lobe } => {
+                let local = c.orient(direction);
+                let world = self.frame.to_world(local).normalize();
+                let cos_geometric = world.dot(self.geometric);
+                if !consistent(cos_geometric, local.z) || rho.is_black() {
+                    return None;
+                }
+                let value = rho * (c.scale * self.shading_factor(local.z, cos_geometric) / local.z.abs());
+                let pdf = PdfW(probability / total);
+                Some(BsdfSample {
+                    direction: world,
+                    value,
+                    cos_generated: cos_geometric.abs(),
+                    pdf: PdfPair { forward: pdf, reverse: pdf },
+                    lobe,
+                    dispersive: c.model.dispersive(),
+                })
+            }
+        }
+    }
+}
+
+/// `x > 0` (false for NaN).
+#[inline]
+fn positive(x: f32) -> bool {
+    x > 0.0
+}
+
+/// The largest `f32` below 1.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;

@@ -1,0 +1,48 @@
+//! Surface differentials ∂p/∂u and ∂p/∂v at a hit, for materials that perturb the shading
+//! normal (normal and bump maps). Computed only for those materials.
+
+use math::{Frame, Vec2, Vec3};
+
+use crate::shape::{Sphere, Triangle};
+
+/// ∂p/∂u, ∂p/∂v of a triangle with texture coordinates `uvs` (constant over the triangle):
+/// the solution of `p1 − p0 = Δu₁ ∂p/∂u + Δv₁ ∂p/∂v`, `p2 − p0 = Δu₂ ∂p/∂u + Δv₂ ∂p/∂v`.
+/// Without uvs, or when they are degenerate, two unit tangents of the geometric normal.
+pub fn triangle(t: &Triangle, uvs: Option<[Vec2; 3]>) -> (Vec3, Vec3) {
+    let fallback = || {
+        let f = Frame::from_z(t.normal);
+        (f.x, f.y)
+    };
+    let Some([uv0, uv1, uv2]) = uvs else { return fallback() };
+    let [p0, p1, p2] = t.vertices();
+    let (duv1, duv2) = (uv1 - uv0, uv2 - uv0);
+    let (dp1, dp2) = (p1 - p0, p2 - p0);
+    let det = duv1.x * duv2.y - duv1.y * duv2.x;
+    if det == 0.0 || !det.is_finite() {
+        return fallback();
+    }
+    let inv = 1.0 / det;
+    let dp_du = (dp1 * duv2.y - dp2 * duv1.y) * inv;
+    let dp_dv = (dp2 * duv1.x - dp1 * duv2.x) * inv;
+    if dp_du.is_finite() && dp_dv.is_finite() { (dp_du, dp_dv) } else { fallback() }
+}
+
+/// ∂p/∂u, ∂p/∂v of a sphere in the parameterisation of [`Sphere::uv_at`] (`u = φ/2π`,
+/// `v = θ/π`): `2π r (−sin φ sin θ, cos φ sin θ, 0)` and `π r (cos θ cos φ, cos θ sin φ, −sin θ)`.
+/// At the poles ∂p/∂u vanishes (the shading frame then falls back to an arbitrary tangent).
+pub fn sphere(s: &Sphere, position: Vec3) -> (Vec3, Vec3) {
+    use std::f32::consts::PI;
+    let d = (position - s.center) / s.radius;
+    let phi = d.y.atan2(d.x);
+    let cos_theta = d.z.clamp(-1.0, 1.0);
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let dp_du = Vec3::new(-d.y, d.x, 0.0) * (2.0 * PI * s.radius);
+    let dp_dv = Vec3::new(cos_theta * phi.cos(), cos_theta * phi.sin(), -sin_theta) * (PI * s.radius);
+    (dp_du, dp_dv)
+}
+
+/// Two unit tangents of `normal` (shapes without a uv parameterisation).
+pub fn fallback(normal: Vec3) -> (Vec3, Vec3) {
+    let f = Frame::from_z(normal);
+    (f.x, f.y)
+}
