@@ -53,10 +53,8 @@ use anyhow::{Context, Result, bail, ensure};
 /// The `ε` in the relative MSE's denominator `b² + ε`.
 pub const RELATIVE_MSE_EPSILON: f64 = 1e-2;
 
-/// Default variance floor of the per-pixel Z-test, relative to the value: the combined
-/// standard error of an entry is at least this times `max(|a|, |b|)` (see the module
-/// documentation).
-pub const RELATIVE_FLOOR: f64 = 1e-3;
+pub use crate::ztest::RELATIVE_FLOOR;
+use crate::ztest::{sidak, two_sided_p, z_score};
 
 /// Channel names, in storage order.
 const CHANNELS: [&str; 3] = ["R", "G", "B"];
@@ -213,10 +211,7 @@ pub fn metrics_with_floor(
             sum_a[c] += x;
             sum_b[c] += y;
             if let Some((va, vb)) = vars {
-                let floor = relative_floor * x.abs().max(y.abs());
-                let variance = f64::from(va[c]).max(0.0) + f64::from(vb[c]).max(0.0);
-                let se = variance.max(floor * floor).sqrt();
-                let z = if d == 0.0 { 0.0 } else { d / se };
+                let z = z_score(x, y, f64::from(va[c]), f64::from(vb[c]), relative_floor);
                 abs_z.push(z.abs());
                 if worst.is_none_or(|(w, ..)| z.abs() > w) {
                     worst = Some((z.abs(), z, index, c));
@@ -433,32 +428,6 @@ fn number(x: f64) -> String {
     }
 }
 
-/// Šidák-corrected per-test level `1 − (1 − alpha)^(1/tests)`, computed accurately for tiny alpha.
-fn sidak(alpha: f64, tests: usize) -> f64 {
-    -((-alpha).ln_1p() / tests.max(1) as f64).exp_m1()
-}
-
-/// Two-sided normal tail probability `P(|Z| ≥ z)` for `z ≥ 0`, i.e. `erfc(z / √2)`.
-fn two_sided_p(z: f64) -> f64 {
-    erfc(z / std::f64::consts::SQRT_2).clamp(0.0, 1.0)
-}
-
-/// The complementary error function, by the Chebyshev-fitted rational approximation of
-/// Numerical Recipes (`erfcc`): relative error below 1.2e-7 for every argument.
-fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let poly = -1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98 + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    let result = t * (-z * z + poly).exp();
-    if x >= 0.0 { result } else { 2.0 - result }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -601,25 +570,6 @@ mod tests {
         let v = constant(&a, 1e-6);
         let z = metrics(&offset(&a, 1e-3), &a, Some((&v, &v)), 1e-3).unwrap().z_test.unwrap();
         assert!((z.worst_z - 1e-3 / 2e-6f64.sqrt()).abs() < 1e-3, "{z:?}");
-    }
-
-    #[test]
-    fn normal_tail_matches_known_quantiles() {
-        assert!((erfc(0.0) - 1.0).abs() < 1e-7);
-        assert!((two_sided_p(1.959_963_984_540_054) - 0.05).abs() < 1e-8);
-        assert!((two_sided_p(3.290_526_731_491_926) - 1e-3).abs() < 1e-9);
-        assert!((two_sided_p(1.0) - 0.317_310_507_862_914_1).abs() < 1e-7);
-        assert!((erfc(-1.0) - 1.842_700_792_949_715).abs() < 1e-7);
-        // Deep tail, relative accuracy: P(|Z| >= 6) = 1.973175e-9.
-        assert!((two_sided_p(6.0) / 1.973_175_290_075_7e-9 - 1.0).abs() < 1e-6);
-        assert_eq!(two_sided_p(100.0), 0.0);
-    }
-
-    #[test]
-    fn sidak_level() {
-        assert!((sidak(0.05, 1) - 0.05).abs() < 1e-15);
-        let level = sidak(1e-3, 1000);
-        assert!(((1.0 - level).powi(1000) - (1.0 - 1e-3)).abs() < 1e-12);
     }
 
     #[test]

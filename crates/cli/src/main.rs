@@ -5,7 +5,9 @@
 mod bench;
 mod bench_accel;
 mod compare;
+mod conformance;
 mod report;
+mod ztest;
 
 use render::path_tracer::{Heuristic, RussianRoulette};
 use std::path::PathBuf;
@@ -40,6 +42,8 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Render scenes with several algorithms at equal time and write an HTML comparison.
     Report(report::ReportArgs),
+    /// Render Mitsuba 3's render test suite and judge every scene against its reference.
+    Conformance(conformance::ConformanceArgs),
 }
 
 /// Algorithm names as the command line spells them.
@@ -334,6 +338,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(args).map(|()| ExitCode::SUCCESS),
         Command::Compare(args) => compare::run(args),
         Command::Report(args) => report::run(args).map(|()| ExitCode::SUCCESS),
+        Command::Conformance(args) => conformance::run(args).map(|()| ExitCode::SUCCESS),
     };
     match outcome {
         Ok(code) => code,

@@ -761,7 +761,7 @@ fn errors_name_file_line_and_column() {
         (
             "instancing",
             "WorldBegin\nObjectBegin \"x\"\n",
-            "scene.pbrt:2:1: ObjectBegin: object instancing is not supported",
+            "scene.pbrt:2:1: ObjectBegin \"x\" without a matching ObjectEnd",
         ),
         ("shape_before_world", "Shape \"sphere\"\n", "scene.pbrt:1:1: Shape is only allowed after WorldBegin"),
         (

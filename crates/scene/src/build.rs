@@ -1,8 +1,9 @@
 //! Turning a [`SceneDescription`] (what a file loader produces) into a renderable [`Scene`].
 
 use crate::camera::Camera;
-use crate::desc::{EmissionSpectrum, Geometry, LightDesc, MeshData, SceneDescription};
+use crate::desc::{EmissionSpectrum, Geometry, LightDesc, MeshData, SceneDescription, ShapeDesc};
 use crate::filter::Filter;
+use crate::instance::{Instance, Object};
 use crate::light::{AreaLight, Light};
 use crate::material::Material;
 use crate::scene::{LightSpectrum, Primitive, Scene, SurfaceAttributes};
@@ -46,98 +47,13 @@ impl Scene {
         if let Some(&index) = spectra.lights.keys().find(|&&i| i as usize >= desc.lights.len()) {
             return Err(format!("an emission spectrum refers to light {index} of {}", desc.lights.len()));
         }
-        // Emission spectra per light, in light order.
-        let mut light_spectra: Vec<Option<LightSpectrum>> = Vec::new();
-        let mut report = BuildReport::default();
-        let mut primitives = Vec::new();
-        let mut attributes = Vec::new();
-        let mut lights = Vec::new();
+        let mut parts = Parts::default();
         for (shape_index, shape) in desc.shapes.iter().enumerate() {
-            if shape.material as usize >= desc.materials.len() {
-                return Err(format!(
-                    "shape '{}' refers to material {} of {}",
-                    shape.name,
-                    shape.material,
-                    desc.materials.len()
-                ));
-            }
-            let emission = shape.emission.filter(|e| !e.is_black());
-            if let Some(e) = emission
-                && (!e.is_finite() || e.r < 0.0 || e.g < 0.0 || e.b < 0.0)
-            {
-                return Err(format!("shape '{}' emits an invalid radiance {:?}", shape.name, e.to_array()));
-            }
-            let spectrum = spectra.shapes.get(&(shape_index as u32));
-            if let Some(s) = spectrum {
-                s.validate().map_err(|e| format!("shape '{}': {e}", shape.name))?;
-            }
-            let spectrum = emission.zip(spectrum).map(|(base, s)| LightSpectrum { spectrum: s.clone(), base });
-            match &shape.geometry {
-                Geometry::Mesh(mesh) => {
-                    mesh.validate().map_err(|e| format!("mesh '{}': {e}", shape.name))?;
-                    for (triangle, extra) in mesh_triangles(mesh) {
-                        let Some(triangle) = triangle else {
-                            report.degenerate_triangles += 1;
-                            continue;
-                        };
-                        let light = emission.map(|radiance| {
-                            lights.push(Light::Area(AreaLight::new(triangle, radiance)));
-                            light_spectra.push(spectrum.clone());
-                            lights.len() as u32 - 1
-                        });
-                        let mut primitive = Primitive::new(Shape::Triangle(triangle), shape.material, light);
-                        if let Some(extra) = extra {
-                            primitive.attributes = attributes.len() as u32;
-                            attributes.push(extra);
-                        }
-                        primitives.push(primitive);
-                        report.triangles += 1;
-                    }
-                }
-                Geometry::Sphere { center, radius, flip_normals } => {
-                    if !(*radius > 0.0 && radius.is_finite() && center.is_finite()) {
-                        return Err(format!("sphere '{}' has radius {radius} at {center}", shape.name));
-                    }
-                    let light = match emission {
-                        Some(radiance) => {
-                            let light = AreaLight::sphere(*center, *radius, *flip_normals, radiance)
-                                .map_err(|e| format!("sphere '{}': {e}", shape.name))?;
-                            lights.push(Light::Area(light));
-                            light_spectra.push(spectrum.clone());
-                            Some(lights.len() as u32 - 1)
-                        }
-                        None => None,
-                    };
-                    let mut primitive = Primitive::new(
-                        Shape::Sphere(Sphere { center: *center, radius: *radius }),
-                        shape.material,
-                        light,
-                    );
-                    if *flip_normals {
-                        primitive.attributes = attributes.len() as u32;
-                        attributes.push(SurfaceAttributes::FlippedNormal);
-                    }
-                    primitives.push(primitive);
-                    report.analytic_shapes += 1;
-                }
-                Geometry::Disk { center, axis_u, axis_v, flip_normals } => {
-                    let disk = Disk::new(*center, *axis_u, *axis_v, *flip_normals)
-                        .ok_or_else(|| format!("disk '{}' is degenerate", shape.name))?;
-                    let light = match emission {
-                        Some(radiance) => {
-                            let light = AreaLight::disc(*center, *axis_u, *axis_v, *flip_normals, radiance)
-                                .map_err(|e| format!("disk '{}': {e}", shape.name))?;
-                            lights.push(Light::Area(light));
-                            light_spectra.push(spectrum.clone());
-                            Some(lights.len() as u32 - 1)
-                        }
-                        None => None,
-                    };
-                    primitives.push(Primitive::new(Shape::Disk(disk), shape.material, light));
-                    report.analytic_shapes += 1;
-                }
-            }
+            parts.add_shape(shape, spectra.shapes.get(&(shape_index as u32)), desc.materials.len())?;
         }
+        let primitives = std::mem::take(&mut parts.primitives);
+        let (objects, instances) = build_instances(desc, &mut parts)?;
+        let Parts { attributes, mut lights, mut light_spectra, mut report, .. } = parts;
         let mut environments = 0;
         for (index, light) in desc.lights.iter().enumerate() {
             if matches!(light, LightDesc::Constant { .. } | LightDesc::EnvMap { .. }) {
@@ -155,10 +71,156 @@ impl Scene {
         report.lights = lights.len();
         let filter = Filter::from_desc(&desc.film.filter)?;
         let camera = Camera::from_desc(&desc.camera, width, height)?.with_filter(filter);
-        let scene = Scene::new(desc.name.clone(), primitives, desc.materials.clone(), lights, camera)
-            .with_attributes(attributes)
-            .with_light_spectra(if light_spectra.iter().any(Option::is_some) { light_spectra } else { Vec::new() });
+        let scene = Scene::with_instances(
+            desc.name.clone(),
+            primitives,
+            objects,
+            instances,
+            desc.materials.clone(),
+            lights,
+            camera,
+        )
+        .with_attributes(attributes)
+        .with_light_spectra(if light_spectra.iter().any(Option::is_some) { light_spectra } else { Vec::new() });
         Ok((scene, report))
+    }
+}
+
+/// The objects of a description (each with its own BVH) and their instances. Object shapes
+/// must not emit (Mitsuba 3 refuses emitters in a `shapegroup`, pbrt-v4 area lights in an
+/// object); their attributes go to `parts`, and their triangles count in its report once per
+/// object, not per instance.
+fn build_instances(desc: &SceneDescription, parts: &mut Parts) -> Result<(Vec<Object>, Vec<Instance>), String> {
+    let mut objects = Vec::with_capacity(desc.objects.len());
+    for object in &desc.objects {
+        for shape in &object.shapes {
+            if shape.emission.is_some_and(|e| !e.is_black()) {
+                return Err(format!(
+                    "shape '{}' in object '{}' emits light: instanced emitters are not supported (Mitsuba 3 \
+                     does not allow emitters in a shapegroup either)",
+                    shape.name, object.name
+                ));
+            }
+            parts.add_shape(shape, None, desc.materials.len())?;
+        }
+        let primitives = std::mem::take(&mut parts.primitives);
+        objects.push(Object::new(object.name.clone(), primitives)?);
+    }
+    let instances = desc
+        .instances
+        .iter()
+        .map(|instance| {
+            if instance.object as usize >= objects.len() {
+                return Err(format!(
+                    "instance '{}' refers to object {} of {}",
+                    instance.name,
+                    instance.object,
+                    objects.len()
+                ));
+            }
+            Instance::new(instance.object, instance.to_world)
+                .ok_or_else(|| format!("instance '{}': the transform is singular or not finite", instance.name))
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    Ok((objects, instances))
+}
+
+/// What the shapes of a description turn into: primitives (of the world or of one object),
+/// their attributes, and the area lights.
+#[derive(Default)]
+struct Parts {
+    primitives: Vec<Primitive>,
+    attributes: Vec<SurfaceAttributes>,
+    lights: Vec<Light>,
+    light_spectra: Vec<Option<LightSpectrum>>,
+    report: BuildReport,
+}
+
+impl Parts {
+    /// Adds the primitives of `shape` (and its area lights, with emission `spectrum`), checking
+    /// its material index against `material_count`.
+    fn add_shape(
+        &mut self,
+        shape: &ShapeDesc,
+        spectrum: Option<&EmissionSpectrum>,
+        material_count: usize,
+    ) -> Result<(), String> {
+        if shape.material as usize >= material_count {
+            return Err(format!("shape '{}' refers to material {} of {}", shape.name, shape.material, material_count));
+        }
+        let emission = shape.emission.filter(|e| !e.is_black());
+        if let Some(e) = emission
+            && (!e.is_finite() || e.r < 0.0 || e.g < 0.0 || e.b < 0.0)
+        {
+            return Err(format!("shape '{}' emits an invalid radiance {:?}", shape.name, e.to_array()));
+        }
+        if let Some(s) = spectrum {
+            s.validate().map_err(|e| format!("shape '{}': {e}", shape.name))?;
+        }
+        let spectrum = emission.zip(spectrum).map(|(base, s)| LightSpectrum { spectrum: s.clone(), base });
+        match &shape.geometry {
+            Geometry::Mesh(mesh) => {
+                mesh.validate().map_err(|e| format!("mesh '{}': {e}", shape.name))?;
+                for (triangle, extra) in mesh_triangles(mesh) {
+                    let Some(triangle) = triangle else {
+                        self.report.degenerate_triangles += 1;
+                        continue;
+                    };
+                    let light = emission.map(|radiance| {
+                        self.lights.push(Light::Area(AreaLight::new(triangle, radiance)));
+                        self.light_spectra.push(spectrum.clone());
+                        self.lights.len() as u32 - 1
+                    });
+                    let mut primitive = Primitive::new(Shape::Triangle(triangle), shape.material, light);
+                    if let Some(extra) = extra {
+                        primitive.attributes = self.attributes.len() as u32;
+                        self.attributes.push(extra);
+                    }
+                    self.primitives.push(primitive);
+                    self.report.triangles += 1;
+                }
+            }
+            Geometry::Sphere { center, radius, flip_normals } => {
+                if !(*radius > 0.0 && radius.is_finite() && center.is_finite()) {
+                    return Err(format!("sphere '{}' has radius {radius} at {center}", shape.name));
+                }
+                let light = match emission {
+                    Some(radiance) => {
+                        let light = AreaLight::sphere(*center, *radius, *flip_normals, radiance)
+                            .map_err(|e| format!("sphere '{}': {e}", shape.name))?;
+                        self.lights.push(Light::Area(light));
+                        self.light_spectra.push(spectrum.clone());
+                        Some(self.lights.len() as u32 - 1)
+                    }
+                    None => None,
+                };
+                let mut primitive =
+                    Primitive::new(Shape::Sphere(Sphere { center: *center, radius: *radius }), shape.material, light);
+                if *flip_normals {
+                    primitive.attributes = self.attributes.len() as u32;
+                    self.attributes.push(SurfaceAttributes::FlippedNormal);
+                }
+                self.primitives.push(primitive);
+                self.report.analytic_shapes += 1;
+            }
+            Geometry::Disk { center, axis_u, axis_v, flip_normals } => {
+                let disk = Disk::new(*center, *axis_u, *axis_v, *flip_normals)
+                    .ok_or_else(|| format!("disk '{}' is degenerate", shape.name))?;
+                let light = match emission {
+                    Some(radiance) => {
+                        let light = AreaLight::disc(*center, *axis_u, *axis_v, *flip_normals, radiance)
+                            .map_err(|e| format!("disk '{}': {e}", shape.name))?;
+                        self.lights.push(Light::Area(light));
+                        self.light_spectra.push(spectrum.clone());
+                        Some(self.lights.len() as u32 - 1)
+                    }
+                    None => None,
+                };
+                self.primitives.push(Primitive::new(Shape::Disk(disk), shape.material, light));
+                self.report.analytic_shapes += 1;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -248,6 +310,8 @@ mod tests {
             max_path_length: Some(5),
             warnings: Vec::new(),
             emission_spectra: Default::default(),
+            objects: Vec::new(),
+            instances: Vec::new(),
         }
     }
 

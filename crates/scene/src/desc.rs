@@ -284,6 +284,33 @@ pub struct SceneDescription {
     pub warnings: Vec<String>,
     /// Spectra of emitters given spectrally in the file (empty for RGB-only scenes).
     pub emission_spectra: EmissionSpectra,
+    /// Geometry defined once and placed by [`SceneDescription::instances`] (Mitsuba
+    /// `shapegroup`, pbrt-v4 `ObjectBegin`/`ObjectEnd`); see [`crate::instance`].
+    pub objects: Vec<ObjectDesc>,
+    /// Placements of [`SceneDescription::objects`] (Mitsuba `instance`, pbrt-v4
+    /// `ObjectInstance`).
+    pub instances: Vec<InstanceDesc>,
+}
+
+/// Shapes defined in their own (object) space, to be placed by instances. The shapes must not
+/// emit: Mitsuba 3 refuses emitters in a `shapegroup`, and pbrt-v4 area lights in an object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectDesc {
+    /// Name for messages (the file's id or object name).
+    pub name: String,
+    /// The shapes, in object space; their materials index [`SceneDescription::materials`].
+    pub shapes: Vec<ShapeDesc>,
+}
+
+/// One placement of an object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstanceDesc {
+    /// Name for messages.
+    pub name: String,
+    /// Index into [`SceneDescription::objects`].
+    pub object: u32,
+    /// Object space to world space (affine, invertible; scene units).
+    pub to_world: glam::Affine3A,
 }
 
 /// Wavelength range (nm) over which [`EmissionSpectrum::Blackbody`] emits: the range of the CIE

@@ -10,6 +10,7 @@ pub mod cornell;
 pub mod desc;
 pub mod film;
 pub mod filter;
+pub mod instance;
 pub mod light;
 pub mod material;
 pub mod microfacet;

@@ -1,11 +1,17 @@
-//! The scene container: primitives with their materials and emitters, the lights, the camera,
-//! the bounding sphere and the BVH, with the two ray queries every integrator uses.
+//! The scene container: primitives with their materials and emitters, instanced objects, the
+//! lights, the camera, the bounding sphere and the BVH, with the two ray queries every
+//! integrator uses.
+//!
+//! The BVH is two-level when the scene has instances: its leaves are the world primitives
+//! (ids `0..primitives.len()`) and the instances (the ids after them), and an instance leaf
+//! traces the object-space ray through its object's own BVH (see [`crate::instance`]).
 
 use math::{Aabb, Distribution1D, RAY_EPSILON, Ray, Vec2, Vec3};
 
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::desc::EmissionSpectrum;
+use crate::instance::{Instance, Object};
 use crate::light::{BoundingSphere, Light};
 use crate::material::{Material, ShadingPoint, SurfaceTangents};
 use crate::shape::Shape;
@@ -63,7 +69,8 @@ pub struct SurfaceHit {
     pub uv: Vec2,
     /// Distance along the ray from its origin.
     pub distance: f32,
-    /// Index of the primitive hit.
+    /// Index of the primitive hit: into [`Scene::primitives`], or for a hit on an instance into
+    /// its object's [`Object::primitives`].
     pub primitive: u32,
     /// Material index.
     pub material: u32,
@@ -96,8 +103,13 @@ pub struct Scene {
     pub bounding_sphere: BoundingSphere,
     /// Index of the environment light, seen by rays that leave the scene.
     pub background: Option<u32>,
-    /// Surface attributes referenced by [`Primitive::attributes`].
+    /// Surface attributes referenced by [`Primitive::attributes`] (of world and object
+    /// primitives alike).
     pub attributes: Vec<SurfaceAttributes>,
+    /// Instanced geometry, each with its own BVH.
+    pub objects: Vec<Object>,
+    /// Placements of [`Scene::objects`].
+    pub instances: Vec<Instance>,
     /// Emission spectra by light index (missing or `None`: the RGB value is upsampled).
     light_spectra: Vec<Option<LightSpectrum>>,
     /// Light selection: proportional to each light's emitted power.
@@ -114,7 +126,27 @@ impl Scene {
         lights: Vec<Light>,
         camera: Camera,
     ) -> Self {
-        let bounds: Vec<Aabb> = primitives.iter().map(|p| p.shape.bounds()).collect();
+        Self::with_instances(name, primitives, Vec::new(), Vec::new(), materials, lights, camera)
+    }
+
+    /// [`Scene::new`] with instanced objects: the top-level BVH holds the world primitives and
+    /// one leaf per instance (its object's box in world space). Object indices of the instances
+    /// must be valid.
+    pub fn with_instances(
+        name: impl Into<String>,
+        primitives: Vec<Primitive>,
+        objects: Vec<Object>,
+        instances: Vec<Instance>,
+        materials: Vec<Material>,
+        lights: Vec<Light>,
+        camera: Camera,
+    ) -> Self {
+        let object_bounds: Vec<Aabb> = objects.iter().map(Object::bounds).collect();
+        let bounds: Vec<Aabb> = primitives
+            .iter()
+            .map(|p| p.shape.bounds())
+            .chain(instances.iter().map(|i| i.world_bounds(object_bounds[i.object as usize])))
+            .collect();
         let scene_box = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
         let (center, radius) = if scene_box.is_empty() { (Vec3::ZERO, 1.0) } else { scene_box.bounding_sphere() };
         let background = lights.iter().position(Light::is_environment).map(|i| i as u32);
@@ -133,6 +165,8 @@ impl Scene {
             bounding_sphere,
             background,
             attributes: Vec::new(),
+            objects,
+            instances,
             light_spectra: Vec::new(),
             light_selection,
             bvh,
@@ -160,11 +194,57 @@ impl Scene {
     /// Nearest intersection of `ray` (any distance > 0).
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
-        let (index, distance) = self
-            .bvh
-            .closest_hit(ray, f32::INFINITY, |i, r, t_max| self.primitives[i as usize].shape.intersect(r, t_max))?;
-        let primitive = &self.primitives[index as usize];
+        let world_primitives = self.primitives.len() as u32;
+        // The object primitive of the nearest instance hit so far: the BVH calls the closure
+        // with the nearest distance found so far and keeps only strictly nearer hits, so the
+        // last instance hit reported is the nearest one whenever an instance wins.
+        let mut object_primitive = 0;
+        let (index, distance) = self.bvh.closest_hit(ray, f32::INFINITY, |i, r, t_max| {
+            if i < world_primitives {
+                return self.primitives[i as usize].shape.intersect(r, t_max);
+            }
+            let instance = &self.instances[(i - world_primitives) as usize];
+            let (primitive, t) =
+                self.objects[instance.object as usize].closest_hit(&instance.to_object_ray(r), t_max)?;
+            object_primitive = primitive;
+            Some(t)
+        })?;
         let position = ray.at(distance);
+        if index < world_primitives {
+            let primitive = &self.primitives[index as usize];
+            let (normal, shading_normal, uv) = self.local_surface(primitive, position);
+            return Some(SurfaceHit {
+                position,
+                normal,
+                shading_normal,
+                uv,
+                distance,
+                primitive: index,
+                material: primitive.material,
+                light: primitive.light,
+            });
+        }
+        // An instance: the surface in object space, normals back to world space.
+        let instance = &self.instances[(index - world_primitives) as usize];
+        let primitive = &self.objects[instance.object as usize].primitives[object_primitive as usize];
+        let local_position = instance.to_object_ray(ray).at(distance);
+        let (normal, shading_normal, uv) = self.local_surface(primitive, local_position);
+        Some(SurfaceHit {
+            position,
+            normal: instance.normal_to_world(normal),
+            shading_normal: instance.normal_to_world(shading_normal),
+            uv,
+            distance,
+            primitive: object_primitive,
+            material: primitive.material,
+            light: None,
+        })
+    }
+
+    /// Geometric normal, shading normal and texture coordinates of `primitive` at `position`,
+    /// both in the primitive's own space (world or object).
+    #[inline]
+    fn local_surface(&self, primitive: &Primitive, position: Vec3) -> (Vec3, Vec3, Vec2) {
         let mut normal = primitive.shape.normal_at(position);
         let mut shading_normal = normal;
         let mut uv = Vec2::ZERO;
@@ -194,21 +274,14 @@ impl Scene {
             }
             (Shape::Disk(d), _) => uv = d.uv_at(position),
         }
+        // Normal and bump maps replace the shading normal (in the primitive's own space, where
+        // its tangents are).
         if let Some(material) = self.materials.get(primitive.material as usize)
             && material.perturbs_shading_normal()
         {
             shading_normal = self.perturbed_normal(material, primitive, position, normal, shading_normal, uv);
         }
-        Some(SurfaceHit {
-            position,
-            normal,
-            shading_normal,
-            uv,
-            distance,
-            primitive: index,
-            material: primitive.material,
-            light: primitive.light,
-        })
+        (normal, shading_normal, uv)
     }
 
     /// The shading normal of a normal- or bump-mapped `material` at a hit (see
@@ -241,7 +314,14 @@ impl Scene {
         if t_max <= 0.0 {
             return false;
         }
-        self.bvh.any_hit(&ray, t_max, |i, r, t| self.primitives[i as usize].shape.intersect(r, t).is_some())
+        let world_primitives = self.primitives.len() as u32;
+        self.bvh.any_hit(&ray, t_max, |i, r, t| {
+            if i < world_primitives {
+                return self.primitives[i as usize].shape.intersect(r, t).is_some();
+            }
+            let instance = &self.instances[(i - world_primitives) as usize];
+            self.objects[instance.object as usize].any_hit(&instance.to_object_ray(r), t)
+        })
     }
 
     /// Picks a light in proportion to its emitted power with `u ∈ [0,1)`: its index, the

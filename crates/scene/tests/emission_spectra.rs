@@ -66,6 +66,8 @@ fn description(materials: Vec<Material>, shapes: Vec<ShapeDesc>, lights: Vec<Lig
         max_path_length: None,
         warnings: Vec::new(),
         emission_spectra: EmissionSpectra::default(),
+        objects: Vec::new(),
+        instances: Vec::new(),
     }
 }
 

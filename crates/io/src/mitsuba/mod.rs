@@ -50,7 +50,10 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use scene::Texture;
-use scene::desc::{CameraDesc, EmissionSpectra, FilmDesc, LightDesc, SceneDescription, ShapeDesc, TextureImage};
+use scene::desc::{
+    CameraDesc, EmissionSpectra, FilmDesc, InstanceDesc, LightDesc, ObjectDesc, SceneDescription, ShapeDesc,
+    TextureImage,
+};
 use scene::material::Material;
 use spectrum::Rgb;
 
@@ -133,6 +136,10 @@ pub(crate) struct Loader<'a> {
     material_of_id: HashMap<String, u32>,
     default_material: Option<u32>,
     shapes: Vec<ShapeDesc>,
+    /// Shape groups (`shapegroup`) built so far, and their indices by id.
+    objects: Vec<ObjectDesc>,
+    object_of_id: HashMap<String, u32>,
+    instances: Vec<InstanceDesc>,
     lights: Vec<LightDesc>,
     emission_spectra: EmissionSpectra,
     attached_emitters: HashSet<String>,
@@ -158,6 +165,9 @@ impl<'a> Loader<'a> {
             material_of_id: HashMap::new(),
             default_material: None,
             shapes: Vec::new(),
+            objects: Vec::new(),
+            object_of_id: HashMap::new(),
+            instances: Vec::new(),
             lights: Vec::new(),
             emission_spectra: EmissionSpectra::default(),
             attached_emitters: HashSet::new(),
@@ -349,6 +359,8 @@ impl<'a> Loader<'a> {
             max_path_length: self.max_path_length,
             warnings: self.warnings,
             emission_spectra: self.emission_spectra,
+            objects: self.objects,
+            instances: self.instances,
         })
     }
 }

@@ -1,8 +1,11 @@
 //! `<shape>` plugins: meshes from files, Mitsuba's analytic rectangle, cube, sphere and disk,
-//! and its cylinder as a tessellated mesh (see `crate::cylinder`).
+//! its cylinder as a tessellated mesh (see `crate::cylinder`), and instancing: a `shapegroup`
+//! (shapes in their own space, referenced by id) placed by `instance` shapes with a
+//! `to_world` (see `scene::instance`).
 
 use math::{Vec2, Vec3};
-use scene::desc::{Geometry, MeshData, ShapeDesc};
+use scene::desc::{Geometry, InstanceDesc, MeshData, ObjectDesc, ShapeDesc};
+use scene::instance::Affine3A;
 
 use super::Loader;
 use super::Resolved;
@@ -103,6 +106,11 @@ pub(crate) fn transform_mesh(
 impl<'a> Loader<'a> {
     /// A `<shape>` element.
     pub(crate) fn shape(&mut self, node: &'a Node) -> Result<(), SceneError> {
+        match node.attr("type") {
+            Some("shapegroup") => return self.shapegroup(node).map(|_| ()),
+            Some("instance") => return self.instance(node),
+            _ => {}
+        }
         let p = Plugin::new(node)?;
         let to_world = p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
         let flip = p.boolean_or("flip_normals", false)?;
@@ -302,4 +310,94 @@ impl<'a> Loader<'a> {
         self.shapes.push(ShapeDesc { name, geometry, material, emission });
         Ok(())
     }
+}
+
+impl<'a> Loader<'a> {
+    /// A `shapegroup`: its shapes become an object (in their own space, placed only by
+    /// instances). Built once, at its first reference or where it stands, whichever comes
+    /// first; returns its object index. Emitters inside are an error, as in Mitsuba 3.
+    fn shapegroup(&mut self, node: &'a Node) -> Result<u32, SceneError> {
+        let id = node.attr("id");
+        if let Some(&index) = id.and_then(|id| self.object_of_id.get(id)) {
+            return Ok(index);
+        }
+        let name = id.map(str::to_string).unwrap_or_else(|| format!("shapegroup#{}", self.objects.len()));
+        let world_shapes = std::mem::take(&mut self.shapes);
+        let mut result = Ok(());
+        for child in &node.children {
+            result = match (child.tag.as_str(), child.attr("type")) {
+                ("shape", Some("shapegroup" | "instance")) => {
+                    Err(child.pos.error(format!("shapegroup '{name}': nested instancing is not supported")))
+                }
+                ("shape", _) => self.shape(child),
+                (tag, _) => {
+                    Err(child.pos.error(format!("shapegroup '{name}': <{tag}> is not allowed in a shapegroup")))
+                }
+            };
+            if result.is_ok()
+                && let Some(shape) = self.shapes.last().filter(|s| s.emission.is_some())
+            {
+                result = Err(child.pos.error(format!(
+                    "shapegroup '{name}': shape '{}' is an emitter; instanced emitters are not supported (nor \
+                     in Mitsuba 3)",
+                    shape.name
+                )));
+            }
+            if result.is_err() {
+                break;
+            }
+        }
+        let shapes = std::mem::replace(&mut self.shapes, world_shapes);
+        result?;
+        if shapes.is_empty() {
+            self.warnings.push(format!("{}: shapegroup '{name}' is empty", node.pos.location()));
+        }
+        if id.is_none() {
+            self.warnings.push(format!("{}: shapegroup without an id cannot be instanced", node.pos.location()));
+        }
+        let index = self.objects.len() as u32;
+        self.objects.push(ObjectDesc { name, shapes });
+        if let Some(id) = id {
+            self.object_of_id.insert(id.to_string(), index);
+        }
+        Ok(index)
+    }
+
+    /// An `instance`: a `<ref>` to a shapegroup placed by `to_world`.
+    fn instance(&mut self, node: &'a Node) -> Result<(), SceneError> {
+        let p = Plugin::new(node)?;
+        let to_world = p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let what = p.what();
+        let mut object = None;
+        for child in &p.objects {
+            if child.node.tag != "ref" {
+                continue;
+            }
+            child.take();
+            if object.is_some() {
+                return Err(child.node.pos.error(format!("{what}: more than one shapegroup")));
+            }
+            let id = child.node.required_attr("id")?;
+            let target =
+                self.ids.get(id).copied().ok_or_else(|| child.node.pos.error(format!("<ref>: unknown id '{id}'")))?;
+            if target.tag != "shape" || target.attr("type") != Some("shapegroup") {
+                return Err(child.node.pos.error(format!("{what}: '{id}' is not a shapegroup")));
+            }
+            object = Some(self.shapegroup(target)?);
+        }
+        let object = object.ok_or_else(|| p.error("an instance needs a <ref> to a shapegroup"))?;
+        p.finish(&mut self.warnings);
+        let to_world = affine(&to_world).ok_or_else(|| p.error("'to_world' is singular or not finite"))?;
+        let name = node.attr("id").map(str::to_string).unwrap_or_else(|| format!("instance#{}", self.instances.len()));
+        self.instances.push(InstanceDesc { name, object, to_world });
+        Ok(())
+    }
+}
+
+/// The affine part of `m` in single precision; `None` when it is singular or not finite.
+fn affine(m: &Mat4) -> Option<Affine3A> {
+    let column = |c: usize| Vec3::new(m.m[0][c] as f32, m.m[1][c] as f32, m.m[2][c] as f32);
+    let affine = Affine3A::from_cols(column(0).into(), column(1).into(), column(2).into(), column(3).into());
+    let determinant = affine.matrix3.determinant();
+    (affine.is_finite() && determinant.is_finite() && determinant != 0.0).then_some(affine)
 }

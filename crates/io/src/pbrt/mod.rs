@@ -52,6 +52,7 @@
 
 pub mod color;
 pub mod envmap;
+mod instancing;
 mod parser;
 pub mod tokenizer;
 mod transform;
@@ -151,6 +152,13 @@ struct Builder {
     materials: Vec<Material>,
     default_material: Option<u32>,
     shapes: Vec<ShapeDesc>,
+    /// Object definitions and instances (`ObjectBegin`, `ObjectInstance`; see `instancing.rs`).
+    objects: Vec<scene::desc::ObjectDesc>,
+    instances: Vec<scene::desc::InstanceDesc>,
+    object_of_name: HashMap<String, u32>,
+    /// The object being defined: its name, the file and position where it began, and the
+    /// world's shapes meanwhile.
+    defining: Option<(String, PathBuf, Pos, Vec<ShapeDesc>)>,
     lights: Vec<LightDesc>,
     emission_spectra: EmissionSpectra,
     warnings: Vec<String>,
@@ -191,6 +199,10 @@ impl Builder {
             materials: Vec::new(),
             default_material: None,
             shapes: Vec::new(),
+            objects: Vec::new(),
+            instances: Vec::new(),
+            object_of_name: HashMap::new(),
+            defining: None,
             lights: Vec::new(),
             emission_spectra: EmissionSpectra::default(),
             warnings: Vec::new(),
@@ -226,6 +238,9 @@ impl Builder {
         let mut parser = Parser::new(path, tokens);
         while let Some(directive) = parser.next_directive()? {
             self.directive(path, directive, depth)?;
+        }
+        if depth == 0 {
+            self.check_objects_closed()?;
         }
         if depth == 0
             && let Some((_, block, file, pos)) = self.stack.last()
@@ -398,9 +413,9 @@ impl Builder {
                 let target = resolve(file, d.str_arg(0));
                 self.run_file(&target, Some((file, d.arg_pos[0])), depth + 1)?;
             }
-            "ObjectBegin" | "ObjectEnd" | "ObjectInstance" => {
-                return Err(err(file, d.pos, format!("{}: object instancing is not supported", d.name)));
-            }
+            "ObjectBegin" => self.object_begin(file, &d)?,
+            "ObjectEnd" => self.object_end(file, &d)?,
+            "ObjectInstance" => self.object_instance(file, &d)?,
             "MakeNamedMedium" => {
                 return Err(err(file, d.pos, "MakeNamedMedium: participating media are not supported"));
             }
@@ -489,6 +504,8 @@ impl Builder {
             max_path_length: self.max_path_length,
             warnings: self.warnings,
             emission_spectra: self.emission_spectra,
+            objects: self.objects,
+            instances: self.instances,
         })
     }
 

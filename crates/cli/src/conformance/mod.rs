@@ -1,0 +1,257 @@
+//! `vcm conformance DIR`: renders every scene of Mitsuba 3's render test suite (its
+//! `tests/scenes` folder) with each requested algorithm through a render session (the code path
+//! of `vcm render --variance`) and judges it against the suite's references by
+//! [`verdict::judge`]. Prints a table on stdout, progress on stderr, and with `--markdown` writes
+//! the table with its provenance. The suite's layout is in [`suite`]; the outputs in [`table`].
+
+mod provenance;
+mod suite;
+mod table;
+mod verdict;
+
+use std::panic::AssertUnwindSafe;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::{Context, Result, bail, ensure};
+use render::Algorithm;
+use render::driver::Budget;
+use session::{Notice, SceneSource};
+
+use suite::Case;
+use table::{Outcome, SceneStatus, Table};
+use verdict::Criteria;
+
+/// Mitsuba 3's render tests give each render this many samples in total (samples per pixel =
+/// this / pixels).
+pub const MITSUBA_SAMPLE_BUDGET: u64 = 2_000_000;
+
+/// Arguments of `vcm conformance`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ConformanceArgs {
+    /// The suite: Mitsuba 3's `tests/scenes` folder (from the mitsuba-data repository, with
+    /// `tests/common` beside it).
+    pub dir: PathBuf,
+    /// Algorithms to render each scene with, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "pt,vcm")]
+    pub algorithms: Vec<String>,
+    /// Iterations (samples per pixel) per render [default: Mitsuba's budget, 2·10⁶ samples per
+    /// image, at least 2].
+    #[arg(long, value_name = "N", conflicts_with = "time")]
+    pub spp: Option<u64>,
+    /// Render each scene for this many seconds per algorithm instead.
+    #[arg(long, value_name = "SECONDS")]
+    pub time: Option<f64>,
+    /// Samples per pixel of the references (their variance images hold the variance of one
+    /// sample; Mitsuba 3's reference script renders 32000).
+    #[arg(long, value_name = "N", default_value_t = 32000.0)]
+    pub reference_spp: f64,
+    /// Only scenes whose `group/name` contains this text.
+    #[arg(long, value_name = "TEXT")]
+    pub filter: Option<String>,
+    /// Load scene files permissively (unsupported parameters become warnings; the render may
+    /// then differ from the file).
+    #[arg(long)]
+    pub permissive: bool,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub threads: usize,
+    /// Also write the table with date, commit, machine and command to this Markdown file.
+    #[arg(long, value_name = "FILE")]
+    pub markdown: Option<PathBuf>,
+}
+
+/// Runs `vcm conformance`.
+pub fn run(args: ConformanceArgs) -> Result<()> {
+    let algorithms: Vec<(String, Algorithm)> = args
+        .algorithms
+        .iter()
+        .map(|name| {
+            let name = name.trim().to_string();
+            let algorithm = Algorithm::from_name(&name).with_context(|| {
+                let valid: Vec<&str> = Algorithm::ALL.iter().map(|(_, n)| *n).collect();
+                format!("--algorithms: unknown algorithm '{name}' (expected some of {})", valid.join(", "))
+            })?;
+            Ok((name, algorithm))
+        })
+        .collect::<Result<_>>()?;
+    ensure!(!algorithms.is_empty(), "--algorithms: name at least one algorithm");
+    if let Some(t) = args.time {
+        ensure!(t.is_finite() && t > 0.0, "--time must be a positive number of seconds, got {t}");
+    }
+    if args.spp == Some(0) {
+        bail!("--spp must be at least 1");
+    }
+    ensure!(
+        args.reference_spp.is_finite() && args.reference_spp >= 1.0,
+        "--reference-spp must be at least 1, got {}",
+        args.reference_spp
+    );
+    let cases: Vec<Case> = suite::discover(&args.dir)?
+        .into_iter()
+        .filter(|c| args.filter.as_ref().is_none_or(|f| c.label().contains(f.as_str())))
+        .collect();
+    ensure!(!cases.is_empty(), "--filter: no scene of '{}' matches", args.dir.display());
+
+    let criteria = Criteria::MITSUBA;
+    let mut rows = Vec::new();
+    for (index, case) in cases.iter().enumerate() {
+        eprintln!("[{}/{}] {}", index + 1, cases.len(), case.label());
+        let status = match judge_case(case, &algorithms, &args, &criteria) {
+            // File names relative to the suite, to keep the lines short.
+            SceneStatus::LoadError(error) => SceneStatus::LoadError(relative_to(&error, &args.dir)),
+            status => status,
+        };
+        rows.push((case.label(), status));
+    }
+    let table = Table { algorithms: algorithms.iter().map(|(n, _)| n.clone()).collect(), rows };
+    print!("{}", table.plain());
+    if let Some(path) = &args.markdown {
+        let provenance = provenance::collect(&budget_words(&args), args.reference_spp);
+        std::fs::write(path, table.markdown(&provenance, &criteria))
+            .with_context(|| format!("cannot write '{}'", path.display()))?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// Loads, renders and judges one scene with every algorithm.
+fn judge_case(
+    case: &Case,
+    algorithms: &[(String, Algorithm)],
+    args: &ConformanceArgs,
+    criteria: &Criteria,
+) -> SceneStatus {
+    if case.needs_media() {
+        return SceneStatus::NeedsMedia;
+    }
+    let source = SceneSource::File(case.scene.clone(), Vec::new());
+    let pixels = match catch(|| session::load_scene(&source, None, args.permissive)) {
+        Ok(loaded) => u64::from(loaded.scene.camera.width) * u64::from(loaded.scene.camera.height),
+        Err(error) => {
+            eprintln!("  does not load: {error}");
+            return SceneStatus::LoadError(error);
+        }
+    };
+    if !case.has_references() {
+        return SceneStatus::NoReference;
+    }
+    let budget = match (args.spp, args.time) {
+        (Some(n), _) => Budget::Iterations(n),
+        (None, Some(t)) => Budget::Time(Duration::from_secs_f64(t)),
+        (None, None) => Budget::Iterations((MITSUBA_SAMPLE_BUDGET / pixels.max(1)).max(2)),
+    };
+    let reference = match read_reference(case, args.reference_spp) {
+        Ok(images) => images,
+        Err(error) => return SceneStatus::LoadError(format!("reference: {}", first_line(&format!("{error:#}")))),
+    };
+    let outcomes = algorithms
+        .iter()
+        .map(|(name, algorithm)| {
+            let outcome = render_and_judge(case, *algorithm, budget, args, &reference, criteria);
+            match &outcome {
+                Outcome::Judged { iterations, verdict } => eprintln!(
+                    "  {name}: {} ({iterations} spp, {:.2} % of entries pass, worst mean ratio {:.4})",
+                    if verdict.passed { "PASS" } else { "FAIL" },
+                    100.0 * verdict.pass_fraction(),
+                    verdict.worst_mean_ratio()
+                ),
+                Outcome::Failed(error) => eprintln!("  {name}: error: {error}"),
+            }
+            outcome
+        })
+        .collect();
+    SceneStatus::Rendered(outcomes)
+}
+
+/// The reference image and the variance of its pixel means (the file's per-sample variance
+/// divided by `reference_spp`).
+fn read_reference(case: &Case, reference_spp: f64) -> Result<(io::Image, io::Image)> {
+    let image = io::read_image(&case.reference)?;
+    let mut variance = io::read_image(&case.reference_variance)?;
+    for pixel in &mut variance.pixels {
+        *pixel = pixel.map(|v| (f64::from(v) / reference_spp) as f32);
+    }
+    Ok((image, variance))
+}
+
+/// Renders `case` with `algorithm` through a session and judges the result.
+fn render_and_judge(
+    case: &Case,
+    algorithm: Algorithm,
+    budget: Budget,
+    args: &ConformanceArgs,
+    (reference, reference_variance): &(io::Image, io::Image),
+    criteria: &Criteria,
+) -> Outcome {
+    let mut request = session::Request::new(SceneSource::File(case.scene.clone(), Vec::new()));
+    request.algorithm = algorithm;
+    request.budget = Some(budget);
+    request.seed = args.seed;
+    request.threads = args.threads;
+    request.permissive = args.permissive;
+    let rendered = catch(|| session::render(&request, None, &mut Quiet));
+    let film = match rendered {
+        Ok(outcome) => outcome.output.film,
+        Err(error) => return Outcome::Failed(error),
+    };
+    let (width, height) = (film.width() as usize, film.height() as usize);
+    let image = io::Image { width, height, pixels: film.mean() };
+    let variance = io::Image { width, height, pixels: film.variance_of_mean() };
+    match verdict::judge(&image, &variance, reference, reference_variance, criteria) {
+        Ok(verdict) => Outcome::Judged { iterations: film.iterations(), verdict },
+        Err(error) => Outcome::Failed(first_line(&format!("{error:#}"))),
+    }
+}
+
+/// Runs `work`, turning its error or panic into the first line of a message.
+fn catch<T>(work: impl FnOnce() -> Result<T>) -> std::result::Result<T, String> {
+    match std::panic::catch_unwind(AssertUnwindSafe(work)) {
+        Ok(Ok(value)) => Ok(value),
+        Ok(Err(error)) => Err(first_line(&format!("{error:#}"))),
+        Err(payload) => {
+            let message = payload
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_else(|| "unknown panic".to_string());
+            Err(format!("panicked: {}", first_line(&message)))
+        }
+    }
+}
+
+/// `text` with every occurrence of `dir/` removed.
+fn relative_to(text: &str, dir: &std::path::Path) -> String {
+    let prefix = format!("{}/", dir.display().to_string().trim_end_matches('/'));
+    text.replace(&prefix, "")
+}
+
+fn first_line(text: &str) -> String {
+    text.lines().next().unwrap_or("").trim().to_string()
+}
+
+/// The per-render budget in words, for the Markdown document.
+fn budget_words(args: &ConformanceArgs) -> String {
+    match (args.spp, args.time) {
+        (Some(n), _) => format!("{n} samples per pixel per render"),
+        (None, Some(t)) => format!("{t} s of wall-clock time per render"),
+        (None, None) => {
+            format!("Mitsuba's budget: {MITSUBA_SAMPLE_BUDGET} samples per image (samples per pixel = that / pixels)")
+        }
+    }
+}
+
+/// Passes the session's warnings and notes to stderr, indented under the scene's progress
+/// line; drops its progress messages.
+struct Quiet;
+
+impl session::Observer for Quiet {
+    fn notice(&mut self, notice: Notice) {
+        if !matches!(notice, Notice::Progress(_)) {
+            eprintln!("  {notice}");
+        }
+    }
+}
