@@ -3,7 +3,7 @@
 use crate::camera::Camera;
 use crate::desc::{EmissionSpectrum, Geometry, LightDesc, MeshData, SceneDescription};
 use crate::filter::Filter;
-use crate::light::{AreaLight, Light};
+use crate::light::{AreaLight, Light, TexturedTriangleLight};
 use crate::material::Material;
 use crate::scene::{LightSpectrum, Primitive, Scene, SurfaceAttributes};
 use crate::shape::{Disk, Shape, Sphere, Triangle};
@@ -72,6 +72,24 @@ impl Scene {
                 s.validate().map_err(|e| format!("shape '{}': {e}", shape.name))?;
             }
             let spectrum = emission.zip(spectrum).map(|(base, s)| LightSpectrum { spectrum: s.clone(), base });
+            let texture = spectra.textures.get(&(shape_index as u32));
+            if let Some(texture) = texture {
+                if spectrum.is_some() {
+                    return Err(format!("shape '{}': a textured emitter cannot have an emission spectrum", shape.name));
+                }
+                if shape.emission.is_none() {
+                    return Err(format!("shape '{}' has an emission texture but does not emit", shape.name));
+                }
+                if !matches!(shape.geometry, Geometry::Mesh(_)) {
+                    return Err(format!(
+                        "shape '{}': textured emission is supported on triangle meshes only",
+                        shape.name
+                    ));
+                }
+                if !texture.max_value().is_finite() {
+                    return Err(format!("shape '{}': the emission texture has non-finite values", shape.name));
+                }
+            }
             match &shape.geometry {
                 Geometry::Mesh(mesh) => {
                     mesh.validate().map_err(|e| format!("mesh '{}': {e}", shape.name))?;
@@ -80,11 +98,25 @@ impl Scene {
                             report.degenerate_triangles += 1;
                             continue;
                         };
-                        let light = emission.map(|radiance| {
-                            lights.push(Light::Area(AreaLight::new(triangle, radiance)));
-                            light_spectra.push(spectrum.clone());
-                            lights.len() as u32 - 1
-                        });
+                        let light = match texture {
+                            // A textured triangle that is black everywhere does not emit.
+                            Some(texture) => {
+                                let uvs = match &extra {
+                                    Some(SurfaceAttributes::Triangle { uvs: Some(uvs), .. }) => *uvs,
+                                    _ => [math::Vec2::ZERO; 3],
+                                };
+                                TexturedTriangleLight::new(triangle, uvs, texture.clone()).map(|light| {
+                                    lights.push(Light::TexturedTriangle(light));
+                                    light_spectra.push(None);
+                                    lights.len() as u32 - 1
+                                })
+                            }
+                            None => emission.map(|radiance| {
+                                lights.push(Light::Area(AreaLight::new(triangle, radiance)));
+                                light_spectra.push(spectrum.clone());
+                                lights.len() as u32 - 1
+                            }),
+                        };
                         let mut primitive = Primitive::new(Shape::Triangle(triangle), shape.material, light);
                         if let Some(extra) = extra {
                             primitive.attributes = attributes.len() as u32;
@@ -167,7 +199,11 @@ impl Scene {
 fn light_spectrum(light: &LightDesc, spectrum: &EmissionSpectrum) -> Result<LightSpectrum, String> {
     spectrum.validate()?;
     let base = match light {
+        LightDesc::Spot { texture: Some(_), .. } => {
+            return Err("a textured spot light cannot have an emission spectrum".into());
+        }
         LightDesc::Point { intensity, .. } | LightDesc::Spot { intensity, .. } => *intensity,
+        LightDesc::Projector { .. } => return Err("a projector cannot have an emission spectrum".into()),
         LightDesc::Directional { irradiance, .. } => *irradiance,
         LightDesc::Constant { radiance } => *radiance,
         LightDesc::EnvMap { .. } => return Err("an image environment cannot have an emission spectrum".into()),
@@ -284,7 +320,10 @@ mod tests {
         assert!((hit.normal - Vec3::Z).length() < 1e-6, "turned to the vertex normals: {}", hit.normal);
         assert!((hit.uv - Vec2::new(0.65, 0.6)).length() < 1e-5, "interpolated uv {}", hit.uv);
         let light = &scene.lights[hit.light.unwrap() as usize];
-        assert!(light.radiance_on_hit(ray.direction, hit.normal, &scene.bounding_sphere).is_some(), "emits upwards");
+        assert!(
+            light.radiance_on_hit(ray.direction, hit.position, hit.normal, &scene.bounding_sphere).is_some(),
+            "emits upwards"
+        );
         // Equal areas: equal power, equal selection probability.
         assert!((scene.light_pick_probability(0) - 0.5).abs() < 1e-6);
     }

@@ -297,6 +297,9 @@ impl<'a> Loader<'a> {
             if let Some(spectrum) = e.spectrum {
                 self.emission_spectra.shapes.insert(self.shapes.len() as u32, spectrum);
             }
+            if let Some(texture) = e.texture {
+                self.emission_spectra.textures.insert(self.shapes.len() as u32, texture);
+            }
             e.radiance
         });
         self.shapes.push(ShapeDesc { name, geometry, material, emission });

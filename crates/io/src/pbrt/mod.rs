@@ -1372,6 +1372,7 @@ impl Builder {
                     intensity,
                     cutoff_degrees: cone,
                     beam_width_degrees: cone - delta,
+                    texture: None,
                 }
             }
             "distant" => {
@@ -1439,7 +1440,7 @@ impl Builder {
                 LightDesc::Point { intensity, .. } | LightDesc::Spot { intensity, .. } => *intensity,
                 LightDesc::Directional { irradiance, .. } => *irradiance,
                 LightDesc::Constant { radiance } => *radiance,
-                LightDesc::EnvMap { .. } => Rgb::BLACK,
+                LightDesc::EnvMap { .. } | LightDesc::Projector { .. } => Rgb::BLACK,
             };
             let base = scene::LightSpectrum { spectrum: s, base: unscaled };
             let scaled = base.spectrum.scaled(base.factor(value)).map_err(|e| err(file, d.pos, e))?;

@@ -7,7 +7,7 @@
 //! Conventions shared by all three:
 //! * `direct_pdf` is the density of choosing the *point* on the light by direct sampling. For
 //!   finite lights it is per unit area ([`PdfA`]); `sample_direct` reports it converted to solid
-//!   angle at the receiver. Delta-position lights (point, spot) have area density 1, so their
+//!   angle at the receiver. Delta-position lights (point, spot, projector) have area density 1, so their
 //!   solid angle density is `distance²`; the directional light has density 1 for its one
 //!   direction. Infinite lights (directional, constant and image environments) store solid-angle
 //!   densities in the area slot (tech report §5.1).
@@ -20,16 +20,20 @@
 //! * Light selection is not included: the caller multiplies by its pick probability; for
 //!   power-proportional selection [`Light::power`] gives each light's emitted flux.
 //!
-//! Area lights are one-sided (the front is the side their geometric normal points to) and emit
-//! constant radiance; their points are sampled uniformly by area on every shape (sphere
-//! included), so direct and emission sampling share one area density.
+//! Area lights are one-sided (the front is the side their geometric normal points to). Those
+//! with constant radiance ([`AreaLight`]) are sampled uniformly by area on every shape (sphere
+//! included); textured triangles ([`TexturedTriangleLight`]) in proportion to their texture.
+//! Either way direct and emission sampling share one area density.
 
 mod area;
 mod background;
 mod directional;
 mod envmap;
 mod point;
+mod projector;
 mod spot;
+mod tabulated;
+mod textured_triangle;
 
 use math::{Frame, PI, PdfA, PdfW, Vec3, warp};
 use spectrum::Rgb;
@@ -41,7 +45,9 @@ pub use background::BackgroundLight;
 pub use directional::DirectionalLight;
 pub use envmap::EnvMapLight;
 pub use point::PointLight;
+pub use projector::ProjectorLight;
 pub use spot::SpotLight;
+pub use textured_triangle::TexturedTriangleLight;
 
 /// The scene's bounding sphere, needed by infinite lights.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,10 +63,14 @@ pub struct BoundingSphere {
 pub enum Light {
     /// One-sided surface emitter (triangle, sphere, disc).
     Area(AreaLight),
+    /// One-sided triangle emitting a radiance texture.
+    TexturedTriangle(TexturedTriangleLight),
     /// Point light.
     Point(PointLight),
     /// Spot light.
     Spot(SpotLight),
+    /// Projector: a point projecting an image.
+    Projector(ProjectorLight),
     /// Directional light.
     Directional(DirectionalLight),
     /// Constant environment.
@@ -128,8 +138,15 @@ impl Light {
                 check_rgb("point light intensity", *intensity)?;
                 Ok(Light::Point(PointLight { position: *position, intensity: *intensity }))
             }
-            LightDesc::Spot { position, direction, intensity, cutoff_degrees, beam_width_degrees } => Ok(Light::Spot(
-                SpotLight::new(*position, *direction, *intensity, *cutoff_degrees, *beam_width_degrees)?,
+            LightDesc::Spot { position, direction, intensity, cutoff_degrees, beam_width_degrees, texture } => {
+                let spot = SpotLight::new(*position, *direction, *intensity, *cutoff_degrees, *beam_width_degrees)?;
+                Ok(Light::Spot(match texture {
+                    None => spot,
+                    Some(t) => spot.with_texture(t.texture.clone(), t.x_axis, t.y_axis)?,
+                }))
+            }
+            LightDesc::Projector { position, frame, irradiance, scale, fov_x_degrees, aspect } => Ok(Light::Projector(
+                ProjectorLight::new(*position, *frame, irradiance.clone(), *scale, *fov_x_degrees, *aspect)?,
             )),
             LightDesc::Directional { direction, irradiance } => {
                 let direction = check_direction("directional light direction", *direction)?;
@@ -149,12 +166,15 @@ impl Light {
     /// True for lights whose position (point, spot) or direction (directional) is a delta
     /// distribution: they cannot be hit by rays.
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Point(_) | Light::Spot(_) | Light::Directional(_))
+        matches!(self, Light::Point(_) | Light::Spot(_) | Light::Projector(_) | Light::Directional(_))
     }
 
-    /// True for lights at finite distance (area, point, spot).
+    /// True for lights at finite distance (area, point, spot, projector).
     pub fn is_finite(&self) -> bool {
-        matches!(self, Light::Area(_) | Light::Point(_) | Light::Spot(_))
+        matches!(
+            self,
+            Light::Area(_) | Light::TexturedTriangle(_) | Light::Point(_) | Light::Spot(_) | Light::Projector(_)
+        )
     }
 
     /// True for the environment lights (constant and image), which rays leaving the scene see.
@@ -166,6 +186,9 @@ impl Light {
     /// power-proportional light selection:
     /// * area: `π·A·L`; point: `4π·I`; spot: `I·∫f dω` with the exact integral of the falloff,
     ///   `2π·I·(1 − (sin c − sin b)/(c − b))`;
+    /// * textured triangle, textured spot, projector: the same integrals evaluated numerically
+    ///   over the texture (see each light); they only steer light selection, which stays
+    ///   unbiased for any positive power;
     /// * directional: `π·R²·E`, the flux through the bounding-sphere disc;
     /// * constant and image environments: `π·R²·∫L(ω) dω` — the radiance from each direction ω
     ///   crosses the bounding-sphere disc perpendicular to ω (area πR²); for a constant
@@ -175,7 +198,9 @@ impl Light {
         match self {
             Light::Area(light) => PI * light.area() * light.radiance.luminance(),
             Light::Point(light) => 4.0 * PI * light.intensity.luminance(),
-            Light::Spot(light) => light.falloff_solid_angle() * light.intensity.luminance(),
+            Light::TexturedTriangle(light) => light.power_luminance(),
+            Light::Spot(light) => light.power_luminance(),
+            Light::Projector(light) => light.power_luminance(),
             Light::Directional(light) => disc_area * light.irradiance.luminance(),
             Light::Background(light) => disc_area * 4.0 * PI * light.radiance.luminance(),
             Light::EnvMap(light) => disc_area * light.luminance_integral(),
@@ -188,7 +213,9 @@ impl Light {
         match self {
             Light::Area(light) => light.sample_direct(receiver, u),
             Light::Point(light) => light.sample_direct(receiver),
+            Light::TexturedTriangle(light) => light.sample_direct(receiver, u),
             Light::Spot(light) => light.sample_direct(receiver),
+            Light::Projector(light) => light.sample_direct(receiver),
             Light::Directional(light) => light.sample_direct(sphere),
             Light::Background(light) => light.sample_direct(u, sphere),
             Light::EnvMap(light) => light.sample_direct(u, sphere),
@@ -206,7 +233,9 @@ impl Light {
         match self {
             Light::Area(light) => light.sample_emission(u_position, u_direction),
             Light::Point(light) => light.sample_emission(u_direction),
+            Light::TexturedTriangle(light) => light.sample_emission(u_position, u_direction),
             Light::Spot(light) => light.sample_emission(u_direction),
+            Light::Projector(light) => light.sample_emission(u_direction),
             Light::Directional(light) => light.sample_emission(u_position, sphere),
             Light::Background(light) => light.sample_emission(u_position, u_direction, sphere),
             Light::EnvMap(light) => light.sample_emission(u_position, u_direction, sphere),
@@ -214,15 +243,23 @@ impl Light {
     }
 
     /// Radiance along a ray with unit direction `ray_direction` that hits the light (area
-    /// lights) or escapes the scene (environment lights). `normal` is the unit geometric normal
-    /// at the hit point, oriented like the emitter's front (for spheres with flipped normals,
-    /// inward); triangles and discs use their own (constant) normal, spheres this one, and
-    /// infinite lights ignore it. `None` for delta lights, which cannot be hit, and for the
-    /// back of area lights.
-    pub fn radiance_on_hit(&self, ray_direction: Vec3, normal: Vec3, sphere: &BoundingSphere) -> Option<HitRadiance> {
+    /// lights) or escapes the scene (environment lights). `position` is the hit point (used by
+    /// textured emitters; infinite lights ignore it) and `normal` the unit geometric normal
+    /// there, oriented like the emitter's front (for spheres with flipped normals, inward);
+    /// triangles and discs use their own (constant) normal, spheres this one, and infinite
+    /// lights ignore it. `None` for delta lights, which cannot be hit, and for the back of
+    /// area lights.
+    pub fn radiance_on_hit(
+        &self,
+        ray_direction: Vec3,
+        position: Vec3,
+        normal: Vec3,
+        sphere: &BoundingSphere,
+    ) -> Option<HitRadiance> {
         match self {
             Light::Area(light) => light.radiance_on_hit(ray_direction, normal),
-            Light::Point(_) | Light::Spot(_) | Light::Directional(_) => None,
+            Light::TexturedTriangle(light) => light.radiance_on_hit(ray_direction, position),
+            Light::Point(_) | Light::Spot(_) | Light::Projector(_) | Light::Directional(_) => None,
             Light::Background(light) => light.radiance_on_hit(sphere),
             Light::EnvMap(light) => light.radiance_on_hit(ray_direction, sphere),
         }
