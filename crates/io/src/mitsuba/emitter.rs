@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use scene::Texture;
-use scene::desc::{EmissionSpectrum, FilmDesc, FilterDesc, LightDesc, SpotTexture, TextureImage};
+use scene::desc::{EmissionSpectrum, FilmDesc, FilterDesc, Geometry, LightDesc, SpotTexture, TextureImage};
 use spectrum::Rgb;
 
 use super::Loader;
@@ -49,6 +49,36 @@ impl<'a> Loader<'a> {
         let spectrum = p.emission_spectrum("radiance")?;
         p.finish(&mut self.warnings);
         Ok(AreaEmission { radiance: rgb(radiance), spectrum, texture: None })
+    }
+
+    /// Records what the shape about to be pushed emits: its spectrum, its texture (on meshes;
+    /// on analytic shapes an error, or in a permissive load the texture's mean with a warning),
+    /// and returns its RGB radiance.
+    pub(crate) fn attach_area_emission(
+        &mut self,
+        e: AreaEmission,
+        geometry: &Geometry,
+        node: &Node,
+    ) -> Result<Rgb, SceneError> {
+        let index = self.shapes.len() as u32;
+        if let Some(spectrum) = e.spectrum {
+            self.emission_spectra.shapes.insert(index, spectrum);
+        }
+        match e.texture {
+            None => Ok(e.radiance),
+            Some(texture) if matches!(geometry, Geometry::Mesh(_)) => {
+                self.emission_spectra.textures.insert(index, texture);
+                Ok(e.radiance)
+            }
+            Some(texture) => {
+                let error = node.pos.error(
+                    "a textured 'radiance' is supported on triangle meshes only (obj, ply, serialized, \
+                     rectangle, cube), not on spheres and discs",
+                );
+                self.unsupported(error, "the texture's mean value is used")?;
+                Ok(super::textured::mean(&texture))
+            }
+        }
     }
 
     /// An emitter color with a default, and its spectrum when the file gives one (recorded for

@@ -6,7 +6,6 @@ use scene::desc::{Geometry, MeshData, ShapeDesc};
 
 use super::Loader;
 use super::Resolved;
-use super::emitter::AreaEmission;
 use super::props::Plugin;
 use super::transform::{Mat4, apply3, cross, dot, from_vec3, length, normalize, positive, to_vec3};
 use super::xml::{Node, Pos};
@@ -293,15 +292,10 @@ impl<'a> Loader<'a> {
         };
         p.finish(&mut self.warnings);
         let name = node.attr("id").map(str::to_string).unwrap_or_else(|| format!("{}#{}", p.ty, self.shapes.len()));
-        let emission = emission.map(|e: AreaEmission| {
-            if let Some(spectrum) = e.spectrum {
-                self.emission_spectra.shapes.insert(self.shapes.len() as u32, spectrum);
-            }
-            if let Some(texture) = e.texture {
-                self.emission_spectra.textures.insert(self.shapes.len() as u32, texture);
-            }
-            e.radiance
-        });
+        let emission = match emission {
+            Some(e) => Some(self.attach_area_emission(e, &geometry, node)?),
+            None => None,
+        };
         self.shapes.push(ShapeDesc { name, geometry, material, emission });
         Ok(())
     }

@@ -16,7 +16,7 @@ const MEAN_GRID: u32 = 64;
 
 /// The mean of `texture` over uv ∈ [0, 1]², estimated at the centres of a
 /// `MEAN_GRID × MEAN_GRID` grid.
-fn mean(texture: &Texture) -> Rgb {
+pub(crate) fn mean(texture: &Texture) -> Rgb {
     if let Some(c) = texture.as_constant() {
         return c;
     }
