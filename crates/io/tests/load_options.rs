@@ -386,3 +386,27 @@ fn textures_on_constant_only_parameters_are_errors_unless_permissive() {
     let s = r.unwrap_or_else(|e| panic!("{e}")).description;
     assert!(matches!(s.emission_spectra.textures.get(&0).map(|t| &**t), Some(Texture::Checkerboard { .. })));
 }
+
+#[test]
+fn pbrt_diffuse_area_light_image_textures_meshes_only() {
+    // A 2×1 image, codes 0 and 255 (sRGB: linear 0 and 1), scaled by 3, looked up at (u, 1 − v).
+    let dir = scratch_dir("pbrt_area_image");
+    let image = image::RgbImage::from_fn(2, 1, |x, _| image::Rgb([[0, 255][x as usize]; 3]));
+    image.save(dir.join("glow.png")).unwrap();
+    let light = "AreaLightSource \"diffuse\" \"string filename\" \"glow.png\" \"float scale\" 3\n";
+    let mesh = "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2] \
+                \"point2 uv\" [0 0 1 0 0 1]\n";
+    let path = dir.join("scene.pbrt");
+    fs::write(&path, format!("{PBRT_HEADER}WorldBegin\n{light}{mesh}")).unwrap();
+    let s = io::load_scene_with(&path, &[], &STRICT).unwrap_or_else(|e| panic!("{e}")).description;
+    let texture = s.emission_spectra.textures.get(&0).expect("the mesh's emission texture");
+    assert!((texture.eval(Vec2::new(0.25, 0.5)).r - 0.0).abs() < 1e-6);
+    assert!((texture.eval(Vec2::new(0.75, 0.5)).g - 3.0).abs() < 1e-5);
+    assert!(s.shapes[0].emission.is_some());
+    // 'L' and 'filename' exclude each other; spheres cannot carry the image.
+    let both = light.replace("\"float scale\" 3", "\"rgb L\" [1 1 1]");
+    fs::write(&path, format!("{PBRT_HEADER}WorldBegin\n{both}{mesh}")).unwrap();
+    assert_error(io::load_scene_with(&path, &[], &STRICT), &path, 3, &["'L' and 'filename'"]);
+    fs::write(&path, format!("{PBRT_HEADER}WorldBegin\n{light}Shape \"sphere\"\n")).unwrap();
+    assert_error(io::load_scene_with(&path, &[], &STRICT), &path, 4, &["triangle mesh"]);
+}
