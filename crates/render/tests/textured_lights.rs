@@ -5,7 +5,8 @@
 //! correction) and on the pooled channel means, and the pooled test would detect a relative
 //! bias of a few percent (asserted with [`common::detectable_bias`]). Light tracing starts
 //! every path with the lights' emission samplers and the path tracer uses their direct
-//! samplers, so the two agreeing checks one against the other.
+//! samplers, so the two agreeing checks one against the other. In spectral mode BPT renders
+//! the textured rectangle like the RGB path tracer (textures upsampled per lookup).
 
 mod common;
 
@@ -60,11 +61,18 @@ fn checkerboard(name: &str, a: &str, b: &str, n: u32) -> String {
 /// `algorithm` against the path tracer on every block and on the pooled means; asserts that
 /// the pooled comparison detects a relative bias of at most `max_detectable`.
 fn agrees_with_pt(scene: &Scene, what: &str, algorithm: &str, iterations: u64, max_detectable: f64) {
+    compare_with_pt(scene, what, algorithm, false, iterations, max_detectable);
+}
+
+/// [`agrees_with_pt`], the tested algorithm in spectral mode when `spectral` (the path tracer
+/// stays in RGB mode: upsampled textures must give the RGB image in expectation).
+fn compare_with_pt(scene: &Scene, what: &str, algorithm: &str, spectral: bool, iterations: u64, max_detectable: f64) {
     let mut pt_settings = settings("pt", 1);
     pt_settings.max_length = 2;
     let pt = block_estimate(scene, &pt_settings, iterations, BLOCK);
     let mut other_settings = settings(algorithm, 2);
     other_settings.max_length = 2;
+    other_settings.spectral = spectral;
     let other = block_estimate(scene, &other_settings, iterations, BLOCK);
     let blocks = other.means.len();
     let outcome = z_test_entries(&other.means, &other.std_errors, &pt.means, &pt.std_errors, ALPHA / 2.0);
@@ -123,4 +131,5 @@ fn textured_area_emitter_light_tracing_bpt_and_vcm_agree_with_path_tracing() {
     agrees_with_pt(&scene, "textured rectangle", "lt", 256, 0.03);
     agrees_with_pt(&scene, "textured rectangle", "bpt", 256, 0.03);
     agrees_with_pt(&scene, "textured rectangle", "vcm", 256, 0.03);
+    compare_with_pt(&scene, "textured rectangle, spectral", "bpt", true, 256, 0.03);
 }
