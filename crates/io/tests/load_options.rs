@@ -141,14 +141,26 @@ fn hide_emitters_is_an_error_unless_permissive() {
 }
 
 #[test]
-fn spot_light_texture_is_an_error_unless_permissive() {
-    let body = "<emitter type=\"spot\">\n<texture type=\"bitmap\" name=\"texture\"><string name=\"filename\" value=\"x.png\"/></texture></emitter>";
-    let (r, path) = mitsuba("spot_texture", body, &STRICT);
-    assert_error(r, &path, 3, &["texture", "spot"]);
-    let (r, _) = mitsuba("spot_texture_permissive", body, &PERMISSIVE);
-    let s = r.unwrap().description;
-    assert!(matches!(s.lights[0], LightDesc::Spot { .. }));
-    assert!(s.warnings.iter().any(|w| w.contains("texture")), "{:?}", s.warnings);
+fn spot_light_texture_is_projected_in_the_spots_frame() {
+    let checks = r#"<rgb name="color0" value="0.1"/><rgb name="color1" value="0.3"/>"#;
+    let body = format!(
+        "<emitter type=\"spot\"><float name=\"cutoff_angle\" value=\"30\"/>\n\
+         <texture type=\"checkerboard\" name=\"texture\">{checks}</texture>\n\
+         <transform name=\"to_world\"><lookat origin=\"0,0,0\" target=\"0,0,1\" up=\"0,1,0\"/></transform></emitter>"
+    );
+    let (r, _) = mitsuba("spot_texture", &body, &STRICT);
+    let s = r.unwrap_or_else(|e| panic!("{e}")).description;
+    let LightDesc::Spot { texture: Some(t), .. } = &s.lights[0] else { panic!("{:?}", s.lights[0]) };
+    // Mitsuba's look-at frame: x = up × direction (left), y = up.
+    assert!((t.x_axis - math::Vec3::X).length() < 1e-6 && (t.y_axis - math::Vec3::Y).length() < 1e-6, "{t:?}");
+    assert!(matches!(*t.texture, Texture::Checkerboard { .. }));
+    // A missing image is an error at the texture, and a cutoff of 90° cannot be projected.
+    let missing = "<emitter type=\"spot\">\n<texture type=\"bitmap\" name=\"texture\"><string name=\"filename\" value=\"x.png\"/></texture></emitter>";
+    let (r, path) = mitsuba("spot_texture_missing", missing, &PERMISSIVE);
+    assert_error(r, &path, 3, &["x.png"]);
+    let wide = body.replace("value=\"30\"", "value=\"100\"");
+    let (r, path) = mitsuba("spot_texture_wide", &wide, &STRICT);
+    assert_error(r, &path, 2, &["cutoff_angle below 90"]);
 }
 
 #[test]
@@ -360,9 +372,39 @@ fn textures_on_constant_only_parameters_are_errors_unless_permissive() {
          </emitter></shape>"
     );
     let (r, path) = mitsuba("textured_radiance", &emitter, &STRICT);
-    assert_error(r, &path, 3, &["'radiance'", "texture", "permissive"]);
+    assert_error(r, &path, 2, &["'radiance'", "triangle meshes", "permissive"]);
     let (r, _) = mitsuba("textured_radiance", &emitter, &PERMISSIVE);
     let s = r.unwrap_or_else(|e| panic!("{e}")).description;
     let e = s.shapes[0].emission.unwrap();
     assert!((e.r - 0.2).abs() < 1e-6 && (e.b - 0.2).abs() < 1e-6, "{e:?}");
+    assert!(s.emission_spectra.textures.is_empty());
+    // On a mesh (a rectangle) the texture is kept for the triangle emitters.
+    let rectangle = emitter.replace("type=\"sphere\"", "type=\"rectangle\"");
+    let (r, _) = mitsuba("textured_radiance_mesh", &rectangle, &STRICT);
+    let s = r.unwrap_or_else(|e| panic!("{e}")).description;
+    assert!(matches!(s.emission_spectra.textures.get(&0).map(|t| &**t), Some(Texture::Checkerboard { .. })));
+}
+
+#[test]
+fn pbrt_diffuse_area_light_image_textures_meshes_only() {
+    // A 2×1 image, codes 0 and 255 (sRGB: linear 0 and 1), scaled by 3, looked up at (u, 1 − v).
+    let dir = scratch_dir("pbrt_area_image");
+    let image = image::RgbImage::from_fn(2, 1, |x, _| image::Rgb([[0, 255][x as usize]; 3]));
+    image.save(dir.join("glow.png")).unwrap();
+    let light = "AreaLightSource \"diffuse\" \"string filename\" \"glow.png\" \"float scale\" 3\n";
+    let mesh = "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2] \
+                \"point2 uv\" [0 0 1 0 0 1]\n";
+    let path = dir.join("scene.pbrt");
+    fs::write(&path, format!("{PBRT_HEADER}WorldBegin\n{light}{mesh}")).unwrap();
+    let s = io::load_scene_with(&path, &[], &STRICT).unwrap_or_else(|e| panic!("{e}")).description;
+    let texture = s.emission_spectra.textures.get(&0).expect("the mesh's emission texture");
+    assert!((texture.eval(Vec2::new(0.25, 0.5)).r - 0.0).abs() < 1e-6);
+    assert!((texture.eval(Vec2::new(0.75, 0.5)).g - 3.0).abs() < 1e-5);
+    assert!(s.shapes[0].emission.is_some());
+    // 'L' and 'filename' exclude each other; spheres cannot carry the image.
+    let both = light.replace("\"float scale\" 3", "\"rgb L\" [1 1 1]");
+    fs::write(&path, format!("{PBRT_HEADER}WorldBegin\n{both}{mesh}")).unwrap();
+    assert_error(io::load_scene_with(&path, &[], &STRICT), &path, 3, &["'L' and 'filename'"]);
+    fs::write(&path, format!("{PBRT_HEADER}WorldBegin\n{light}Shape \"sphere\"\n")).unwrap();
+    assert_error(io::load_scene_with(&path, &[], &STRICT), &path, 4, &["triangle mesh"]);
 }

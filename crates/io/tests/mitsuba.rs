@@ -610,7 +610,7 @@ fn point_spot_directional_constant_lights() {
         LightDesc::Point { position: Vec3::new(1.0, 2.0, 3.0), intensity: Rgb::new(5.0, 6.0, 7.0) }
     );
     match s.lights[1] {
-        LightDesc::Spot { position, direction, intensity, cutoff_degrees, beam_width_degrees } => {
+        LightDesc::Spot { position, direction, intensity, cutoff_degrees, beam_width_degrees, texture: None } => {
             assert_vec(position, Vec3::new(0.0, 4.0, 0.0), 1e-6);
             assert_vec(direction, Vec3::new(0.0, -1.0, 0.0), 1e-6);
             assert_rgb(intensity, [2.0; 3], 0.0);

@@ -574,7 +574,7 @@ fn point_spot_and_distant_lights() {
         LightDesc::Point { position: Vec3::new(1.0, 2.0, 0.0), intensity: Rgb::new(2.0, 4.0, 6.0) }
     );
     match d.lights[1] {
-        LightDesc::Spot { position, direction, intensity, cutoff_degrees, beam_width_degrees } => {
+        LightDesc::Spot { position, direction, intensity, cutoff_degrees, beam_width_degrees, texture: None } => {
             assert_close(position, Vec3::new(1.0, 0.0, 0.0), 1e-6);
             assert_close(direction, -Vec3::Y, 1e-6);
             assert_eq!(intensity, Rgb::splat(5.0));

@@ -173,7 +173,8 @@ fn radiance<S: SpectralMode>(
         let Some(hit) = scene.intersect(&ray) else {
             // The ray leaves the scene: environment light.
             if let Some(index) = scene.background
-                && let Some(emitted) = scene.lights[index as usize].radiance_on_hit(ray.direction, Vec3::ZERO, sphere)
+                && let Some(emitted) =
+                    scene.lights[index as usize].radiance_on_hit(ray.direction, Vec3::ZERO, Vec3::ZERO, sphere)
             {
                 let weight = if last_specular || !nee {
                     1.0
@@ -188,7 +189,7 @@ fn radiance<S: SpectralMode>(
         // Emitter hit: collect (front side only).
         if let Some(light_index) = hit.light {
             let light = &scene.lights[light_index as usize];
-            if let Some(emitted) = light.radiance_on_hit(ray.direction, hit.normal, sphere) {
+            if let Some(emitted) = light.radiance_on_hit(ray.direction, hit.position, hit.normal, sphere) {
                 let weight = if last_specular || !nee {
                     1.0
                 } else {

@@ -4,10 +4,12 @@ use crate::camera::Camera;
 use crate::desc::{EmissionSpectrum, Geometry, LightDesc, MeshData, SceneDescription, ShapeDesc};
 use crate::filter::Filter;
 use crate::instance::{Instance, Object};
-use crate::light::{AreaLight, Light};
+use crate::light::{AreaLight, Light, TexturedTriangleLight};
 use crate::material::Material;
 use crate::scene::{LightSpectrum, Primitive, Scene, SurfaceAttributes};
 use crate::shape::{Disk, Shape, Sphere, Triangle};
+use crate::texture::Texture;
+use std::sync::Arc;
 
 /// What [`Scene::from_description`] built, for the user's summary line.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -49,7 +51,8 @@ impl Scene {
         }
         let mut parts = Parts::default();
         for (shape_index, shape) in desc.shapes.iter().enumerate() {
-            parts.add_shape(shape, spectra.shapes.get(&(shape_index as u32)), desc.materials.len())?;
+            let index = shape_index as u32;
+            parts.add_shape(shape, spectra.shapes.get(&index), spectra.textures.get(&index), desc.materials.len())?;
         }
         let primitives = std::mem::take(&mut parts.primitives);
         let (objects, instances) = build_instances(desc, &mut parts)?;
@@ -101,7 +104,7 @@ fn build_instances(desc: &SceneDescription, parts: &mut Parts) -> Result<(Vec<Ob
                     shape.name, object.name
                 ));
             }
-            parts.add_shape(shape, None, desc.materials.len())?;
+            parts.add_shape(shape, None, None, desc.materials.len())?;
         }
         let primitives = std::mem::take(&mut parts.primitives);
         objects.push(Object::new(object.name.clone(), primitives)?);
@@ -143,6 +146,7 @@ impl Parts {
         &mut self,
         shape: &ShapeDesc,
         spectrum: Option<&EmissionSpectrum>,
+        texture: Option<&Arc<Texture>>,
         material_count: usize,
     ) -> Result<(), String> {
         if shape.material as usize >= material_count {
@@ -158,6 +162,20 @@ impl Parts {
             s.validate().map_err(|e| format!("shape '{}': {e}", shape.name))?;
         }
         let spectrum = emission.zip(spectrum).map(|(base, s)| LightSpectrum { spectrum: s.clone(), base });
+        if let Some(texture) = texture {
+            if spectrum.is_some() {
+                return Err(format!("shape '{}': a textured emitter cannot have an emission spectrum", shape.name));
+            }
+            if shape.emission.is_none() {
+                return Err(format!("shape '{}' has an emission texture but does not emit", shape.name));
+            }
+            if !matches!(shape.geometry, Geometry::Mesh(_)) {
+                return Err(format!("shape '{}': textured emission is supported on triangle meshes only", shape.name));
+            }
+            if !texture.max_value().is_finite() {
+                return Err(format!("shape '{}': the emission texture has non-finite values", shape.name));
+            }
+        }
         match &shape.geometry {
             Geometry::Mesh(mesh) => {
                 mesh.validate().map_err(|e| format!("mesh '{}': {e}", shape.name))?;
@@ -166,11 +184,25 @@ impl Parts {
                         self.report.degenerate_triangles += 1;
                         continue;
                     };
-                    let light = emission.map(|radiance| {
-                        self.lights.push(Light::Area(AreaLight::new(triangle, radiance)));
-                        self.light_spectra.push(spectrum.clone());
-                        self.lights.len() as u32 - 1
-                    });
+                    let light = match texture {
+                        // A textured triangle that is black everywhere does not emit.
+                        Some(texture) => {
+                            let uvs = match &extra {
+                                Some(SurfaceAttributes::Triangle { uvs: Some(uvs), .. }) => *uvs,
+                                _ => [math::Vec2::ZERO; 3],
+                            };
+                            TexturedTriangleLight::new(triangle, uvs, texture.clone()).map(|light| {
+                                self.lights.push(Light::TexturedTriangle(light));
+                                self.light_spectra.push(None);
+                                self.lights.len() as u32 - 1
+                            })
+                        }
+                        None => emission.map(|radiance| {
+                            self.lights.push(Light::Area(AreaLight::new(triangle, radiance)));
+                            self.light_spectra.push(spectrum.clone());
+                            self.lights.len() as u32 - 1
+                        }),
+                    };
                     let mut primitive = Primitive::new(Shape::Triangle(triangle), shape.material, light);
                     if let Some(extra) = extra {
                         primitive.attributes = self.attributes.len() as u32;
@@ -229,7 +261,11 @@ impl Parts {
 fn light_spectrum(light: &LightDesc, spectrum: &EmissionSpectrum) -> Result<LightSpectrum, String> {
     spectrum.validate()?;
     let base = match light {
+        LightDesc::Spot { texture: Some(_), .. } => {
+            return Err("a textured spot light cannot have an emission spectrum".into());
+        }
         LightDesc::Point { intensity, .. } | LightDesc::Spot { intensity, .. } => *intensity,
+        LightDesc::Projector { .. } => return Err("a projector cannot have an emission spectrum".into()),
         LightDesc::Directional { irradiance, .. } => *irradiance,
         LightDesc::Constant { radiance } => *radiance,
         LightDesc::EnvMap { .. } => return Err("an image environment cannot have an emission spectrum".into()),
@@ -348,7 +384,10 @@ mod tests {
         assert!((hit.normal - Vec3::Z).length() < 1e-6, "turned to the vertex normals: {}", hit.normal);
         assert!((hit.uv - Vec2::new(0.65, 0.6)).length() < 1e-5, "interpolated uv {}", hit.uv);
         let light = &scene.lights[hit.light.unwrap() as usize];
-        assert!(light.radiance_on_hit(ray.direction, hit.normal, &scene.bounding_sphere).is_some(), "emits upwards");
+        assert!(
+            light.radiance_on_hit(ray.direction, hit.position, hit.normal, &scene.bounding_sphere).is_some(),
+            "emits upwards"
+        );
         // Equal areas: equal power, equal selection probability.
         assert!((scene.light_pick_probability(0) - 0.5).abs() < 1e-6);
     }

@@ -18,6 +18,7 @@ use spectrum::Rgb;
 use spectrum::tabulated::Tabulated;
 
 use crate::material::Material;
+use crate::texture::Texture;
 
 /// A linear-RGB image used as a texture or an environment map. Row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]
@@ -161,6 +162,30 @@ pub enum LightDesc {
         cutoff_degrees: f32,
         /// Half-angle where the falloff begins (degrees, ≤ cutoff).
         beam_width_degrees: f32,
+        /// An image projected over the cone (Mitsuba's spot `texture`), if any.
+        texture: Option<SpotTexture>,
+    },
+    /// A projector (Mitsuba's `projector`, pbrt-v4's `projection` light): a point at
+    /// `position` projecting `irradiance` through a pinhole, as a perspective camera with the
+    /// same frame and field of view would see it. The image plane lies at distance 1 along
+    /// `frame[2]`; a direction with local coordinates `(x, y, z)` (`z > 0`) looks up
+    /// `u = ½ − ½·x/(z·t)`, `v = ½ − ½·a·y/(z·t)`, `t = tan(fov_x/2)`, `a` = `aspect`, and
+    /// carries the intensity `π·scale·E(u, v)/cos³θ` (W/sr), so that the image plane receives
+    /// the irradiance `π·scale·E` (Mitsuba 3's normalisation).
+    Projector {
+        /// Position of the pinhole.
+        position: Vec3,
+        /// World images of the local axes: `x` (the image's left), `y` (its up), `z` (the
+        /// optical axis); orthonormal.
+        frame: [Vec3; 3],
+        /// The projected image (unitless texture over uv ∈ [0, 1]², row 0 at the top).
+        irradiance: Arc<Texture>,
+        /// Factor applied to the image.
+        scale: f32,
+        /// Full horizontal field of view (degrees, in (0, 180)).
+        fov_x_degrees: f32,
+        /// Image width / height.
+        aspect: f32,
     },
     /// Directional light travelling along `direction`.
     Directional {
@@ -187,6 +212,19 @@ pub enum LightDesc {
         /// local x, y, z axes; orthonormal).
         to_world: [Vec3; 3],
     },
+}
+
+/// The image a spot light projects over its cone: a local direction `(x, y, z)` (`z` along
+/// the axis, `x` and `y` along the axes below) looks up
+/// `uv = (½ + ½·x/(z·tan c), ½ + ½·y/(z·tan c))`, `c` the cutoff angle (Mitsuba 3's spot).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpotTexture {
+    /// The texture (unitless factor on the intensity).
+    pub texture: Arc<Texture>,
+    /// Unit world direction of the local `x` axis (orthogonal to the spot's axis).
+    pub x_axis: Vec3,
+    /// Unit world direction of the local `y` axis (orthogonal to the axis and `x_axis`).
+    pub y_axis: Vec3,
 }
 
 /// The camera's projection.
@@ -421,7 +459,8 @@ impl EmissionSpectrum {
 /// the emitter's RGB value in the description is its colour as the loader converted it
 /// (possibly clamped into the gamut). Spectral rendering emits the spectrum wherever RGB
 /// rendering emits the RGB value, times the same geometric factors (see
-/// [`crate::Scene::emission`]).
+/// [`crate::Scene::emission`]). It also carries the radiance textures of textured area
+/// emitters, the other way in which an emitter's emission differs from one RGB value.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EmissionSpectra {
     /// Spectra of area emitters, by index into [`SceneDescription::shapes`].
@@ -429,4 +468,9 @@ pub struct EmissionSpectra {
     /// Spectra of other lights, by index into [`SceneDescription::lights`] (not for image
     /// environments).
     pub lights: BTreeMap<u32, EmissionSpectrum>,
+    /// Radiance textures of area emitters (W·m⁻²·sr⁻¹ per channel, looked up at the surface's
+    /// uv), by index into [`SceneDescription::shapes`]; such a shape's
+    /// [`ShapeDesc::emission`] must be `Some` (its value is then unused) and it has no spectrum.
+    /// Spectral rendering upsamples the texture's RGB values.
+    pub textures: BTreeMap<u32, Arc<Texture>>,
 }

@@ -142,6 +142,21 @@ impl Texture {
         }
     }
 
+    /// The image resolution `(width, height)` in texels, for image textures (the largest of
+    /// the parts of a product or blend); `None` for textures without a natural resolution.
+    pub fn resolution(&self) -> Option<(u32, u32)> {
+        match self {
+            Texture::Constant(_) | Texture::Checkerboard { .. } => None,
+            Texture::Bitmap { image, .. } | Texture::SampledBitmap { image, .. } => Some((image.width, image.height)),
+            Texture::Scale { texture: a, scale: b } | Texture::Mix { tex1: a, tex2: b, .. } => {
+                match (a.resolution(), b.resolution()) {
+                    (Some(x), Some(y)) => Some((x.0.max(y.0), x.1.max(y.1))),
+                    (x, y) => x.or(y),
+                }
+            }
+        }
+    }
+
     /// An upper bound of every channel over the surface (for textures without negative
     /// values, which the loaders ensure for reflectances).
     pub fn max_value(&self) -> Rgb {

@@ -195,12 +195,12 @@ fn the_three_queries_report_the_same_pdfs_for_the_same_ray() {
     let mut rng = Rng::for_stream(1, 2, 3);
     for _ in 0..100 {
         let Some(d) = l.sample_direct(receiver, rng.uniform2(), &s) else { continue };
-        let hit = l.radiance_on_hit(d.direction, area_triangle().normal, &s).unwrap();
+        let hit = l.radiance_on_hit(d.direction, Vec3::ZERO, area_triangle().normal, &s).unwrap();
         let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs());
         assert!(close(hit.emission_pdf.0, d.emission_pdf.0));
         assert!(close(hit.direct_pdf.to_solid_angle(d.distance * d.distance, d.cos_at_light).0, d.direct_pdf.0));
         assert!(close(hit.cos_at_light, d.cos_at_light));
-        assert!(l.radiance_on_hit(-d.direction, area_triangle().normal, &s).is_none(), "one-sided");
+        assert!(l.radiance_on_hit(-d.direction, Vec3::ZERO, area_triangle().normal, &s).is_none(), "one-sided");
     }
     // Emission: the emission pdf is area pdf × cosine pdf.
     let e = l.sample_emission([0.2, 0.3], [0.6, 0.5], &s);
@@ -210,14 +210,14 @@ fn the_three_queries_report_the_same_pdfs_for_the_same_ray() {
     // Background: direct, emission and hit agree.
     let b = Light::Background(BackgroundLight { radiance: Rgb::splat(0.5) });
     let d = b.sample_direct(receiver, [0.3, 0.8], &s).unwrap();
-    let hit = b.radiance_on_hit(d.direction, Vec3::ZERO, &s).unwrap();
+    let hit = b.radiance_on_hit(d.direction, Vec3::ZERO, Vec3::ZERO, &s).unwrap();
     let e = b.sample_emission([0.3, 0.8], [0.3, 0.8], &s);
     assert_eq!(hit.emission_pdf, d.emission_pdf);
     assert_eq!(e.emission_pdf, d.emission_pdf);
     assert_eq!(hit.direct_pdf.0, d.direct_pdf.0);
     // Delta lights cannot be hit; flags.
     let p = Light::Point(PointLight { position: Vec3::ZERO, intensity: Rgb::WHITE });
-    assert!(p.radiance_on_hit(Vec3::Z, Vec3::ZERO, &s).is_none() && p.is_delta() && p.is_finite());
+    assert!(p.radiance_on_hit(Vec3::Z, Vec3::ZERO, Vec3::ZERO, &s).is_none() && p.is_delta() && p.is_finite());
     assert!(!b.is_delta() && !b.is_finite());
     assert!(l.is_finite() && !l.is_delta());
 }
@@ -428,7 +428,7 @@ fn spot() -> SpotLight {
 #[test]
 fn spot_light_emits_uniformly_in_its_cutoff_cone() {
     let light = spot();
-    let l = Light::Spot(light);
+    let l = Light::Spot(light.clone());
     let frame = Frame::from_z(light.axis());
     let cos_cutoff = SPOT_CUTOFF.to_radians().cos();
     let outcome = chi2_sphere(
@@ -447,7 +447,7 @@ fn spot_light_emits_uniformly_in_its_cutoff_cone() {
 #[test]
 fn spot_light_falls_off_linearly_in_angle_like_mitsuba() {
     let light = spot();
-    let l = Light::Spot(light);
+    let l = Light::Spot(light.clone());
     let frame = Frame::from_z(light.axis());
     // Mitsuba 3: 1 inside the beam, (cutoff − θ)/(cutoff − beam) in the transition, 0 beyond.
     let expected = |theta: f32| {
@@ -542,7 +542,9 @@ fn envmap_follows_the_mitsuba_lat_long_convention() {
     let l = Light::from_desc(&LightDesc::EnvMap { image, scale: 2.0, to_world: env_rotation() }).unwrap();
     let s = sphere();
     let at = |x: f32, y: f32| {
-        l.radiance_on_hit(env_direction((x + 0.5) / w as f32, y / (h - 1) as f32), Vec3::ZERO, &s).unwrap().radiance
+        l.radiance_on_hit(env_direction((x + 0.5) / w as f32, y / (h - 1) as f32), Vec3::ZERO, Vec3::ZERO, &s)
+            .unwrap()
+            .radiance
     };
     let close = |a: Rgb, b: Rgb| (a - b).map(f32::abs).max_component() < 1e-4;
     assert!(close(at(x0 as f32, y0 as f32), value * 2.0), "{:?}", at(x0 as f32, y0 as f32));
@@ -556,13 +558,13 @@ fn envmap_follows_the_mitsuba_lat_long_convention() {
     pixels[..w as usize].fill(value);
     let image = Arc::new(TextureImage { width: w, height: h, pixels: pixels.clone() });
     let l = Light::from_desc(&LightDesc::EnvMap { image, scale: 1.0, to_world: env_rotation() }).unwrap();
-    assert!(close(l.radiance_on_hit(env_rotation()[1], Vec3::ZERO, &s).unwrap().radiance, value));
-    assert!(close(l.radiance_on_hit(-env_rotation()[1], Vec3::ZERO, &s).unwrap().radiance, Rgb::BLACK));
+    assert!(close(l.radiance_on_hit(env_rotation()[1], Vec3::ZERO, Vec3::ZERO, &s).unwrap().radiance, value));
+    assert!(close(l.radiance_on_hit(-env_rotation()[1], Vec3::ZERO, Vec3::ZERO, &s).unwrap().radiance, Rgb::BLACK));
     // u wraps around: u = 0 lies halfway between the last and the first pixel centres.
     pixels[(w - 1) as usize] = Rgb::WHITE;
     let image = Arc::new(TextureImage { width: w, height: h, pixels });
     let l = Light::from_desc(&LightDesc::EnvMap { image, scale: 1.0, to_world: env_rotation() }).unwrap();
-    let wrap = l.radiance_on_hit(env_direction(0.0, 1e-4), Vec3::ZERO, &s).unwrap().radiance;
+    let wrap = l.radiance_on_hit(env_direction(0.0, 1e-4), Vec3::ZERO, Vec3::ZERO, &s).unwrap().radiance;
     assert!((wrap.r - 0.5 * (value.r + 1.0)).abs() < 1e-2, "{wrap:?}");
 }
 
@@ -581,7 +583,7 @@ fn envmap_direct_sampling_matches_its_pdf() {
         Vec3::new(-v.z, v.x, v.y)
     };
     let from_bins = move |b: Vec3| rotation * Vec3::new(b.y, b.z, -b.x);
-    let pdf = |b: Vec3| l.radiance_on_hit(from_bins(b), Vec3::ZERO, &s).unwrap().direct_pdf.0 as f64;
+    let pdf = |b: Vec3| l.radiance_on_hit(from_bins(b), Vec3::ZERO, Vec3::ZERO, &s).unwrap().direct_pdf.0 as f64;
     // Expected counts need ~1 % accuracy; a looser quadrature tolerance keeps the cell edges,
     // where the pdf jumps, cheap.
     let integration = Integration { rel_tolerance: 1e-3, abs_tolerance: 1e-5, max_depth: 5, ..Integration::default() };
@@ -646,7 +648,7 @@ fn envmap_pdf_is_positive_wherever_radiance_is_and_integrates_to_one() {
         let mut rng = Rng::for_stream(4, 5, 6);
         for _ in 0..200_000 {
             let d = warp::uniform_sphere(rng.uniform2());
-            let hit = l.radiance_on_hit(d, Vec3::ZERO, &s).unwrap();
+            let hit = l.radiance_on_hit(d, Vec3::ZERO, Vec3::ZERO, &s).unwrap();
             if !hit.radiance.is_black() {
                 lit += 1;
                 assert!(hit.direct_pdf.0 > 0.0, "{name}: radiance {:?} but pdf 0 at {d}", hit.radiance);
@@ -717,13 +719,13 @@ fn new_lights_report_the_same_pdfs_and_radiance_for_the_same_ray() {
         for _ in 0..500 {
             let Some(d) = l.sample_direct(*receiver, rng.uniform2(), &s) else { continue };
             let p = *receiver + d.distance * d.direction;
-            let hit = l.radiance_on_hit(d.direction, front(p), &s).unwrap();
+            let hit = l.radiance_on_hit(d.direction, Vec3::ZERO, front(p), &s).unwrap();
             assert_eq!(hit.radiance, d.radiance, "{name}");
             assert!(rel_close(hit.emission_pdf.0, d.emission_pdf.0, 1e-4), "{name}");
             assert!(rel_close(hit.cos_at_light, d.cos_at_light, 1e-4), "{name}");
             let direct_w = hit.direct_pdf.to_solid_angle(d.distance * d.distance, hit.cos_at_light);
             assert!(rel_close(direct_w.0, d.direct_pdf.0, 1e-3), "{name}: {} vs {}", direct_w.0, d.direct_pdf.0);
-            assert!(l.radiance_on_hit(-d.direction, front(p), &s).is_none(), "{name}: one-sided");
+            assert!(l.radiance_on_hit(-d.direction, Vec3::ZERO, front(p), &s).is_none(), "{name}: one-sided");
             checked += 1;
         }
         assert!(checked > 100, "{name}: only {checked} direct samples");
@@ -736,14 +738,14 @@ fn new_lights_report_the_same_pdfs_and_radiance_for_the_same_ray() {
             assert!(rel_close(e.direct_pdf.0, 1.0 / a.area(), 1e-5), "{name}");
             assert!(rel_close(e.emission_pdf.0, e.direct_pdf.0 * e.cos_at_light / math::PI, 1e-4), "{name}");
             assert!(rgb_close(e.energy, a.radiance * e.cos_at_light, 1e-5), "{name}");
-            let hit = l.radiance_on_hit(-e.direction, n, &s).unwrap();
+            let hit = l.radiance_on_hit(-e.direction, Vec3::ZERO, n, &s).unwrap();
             assert!(rel_close(hit.emission_pdf.0, e.emission_pdf.0, 1e-4), "{name}");
         }
     }
 
     // Spot: emission energy in a direction equals the direct radiance seen from along it.
     let light = spot();
-    let l = Light::Spot(light);
+    let l = Light::Spot(light.clone());
     for _ in 0..200 {
         let e = l.sample_emission(rng.uniform2(), rng.uniform2(), &s);
         let Some(d) = l.sample_direct(light.position + 3.0 * e.direction, rng.uniform2(), &s) else {
@@ -754,7 +756,7 @@ fn new_lights_report_the_same_pdfs_and_radiance_for_the_same_ray() {
         assert_eq!(d.emission_pdf, e.emission_pdf);
         assert_eq!(e.direct_pdf.0, 1.0);
     }
-    assert!(l.radiance_on_hit(Vec3::Z, Vec3::Z, &s).is_none() && l.is_delta() && l.is_finite());
+    assert!(l.radiance_on_hit(Vec3::Z, Vec3::ZERO, Vec3::Z, &s).is_none() && l.is_delta() && l.is_finite());
 
     // Environment map: direct and emission samples against the hit of the same direction.
     let l = env_light();
@@ -762,12 +764,12 @@ fn new_lights_report_the_same_pdfs_and_radiance_for_the_same_ray() {
     for _ in 0..1000 {
         let d = l.sample_direct(Vec3::new(0.2, 0.1, 0.0), rng.uniform2(), &s).unwrap();
         assert!(d.distance.is_infinite() && d.cos_at_light == 1.0);
-        let hit = l.radiance_on_hit(d.direction, Vec3::ZERO, &s).unwrap();
+        let hit = l.radiance_on_hit(d.direction, Vec3::ZERO, Vec3::ZERO, &s).unwrap();
         assert!(rgb_close(hit.radiance, d.radiance, 1e-3), "{:?} vs {:?}", hit.radiance, d.radiance);
         assert!(rel_close(hit.direct_pdf.0, d.direct_pdf.0, 1e-3), "{} vs {}", hit.direct_pdf.0, d.direct_pdf.0);
         assert!(rel_close(hit.emission_pdf.0, d.emission_pdf.0, 1e-3));
         let e = l.sample_emission(rng.uniform2(), rng.uniform2(), &s);
-        let hit = l.radiance_on_hit(-e.direction, Vec3::ZERO, &s).unwrap();
+        let hit = l.radiance_on_hit(-e.direction, Vec3::ZERO, Vec3::ZERO, &s).unwrap();
         assert!(rgb_close(hit.radiance, e.energy, 1e-3), "{:?} vs {:?}", hit.radiance, e.energy);
         assert!(rel_close(hit.direct_pdf.0, e.direct_pdf.0, 1e-3));
         assert!(rel_close(hit.emission_pdf.0, e.emission_pdf.0, 1e-3));

@@ -2,7 +2,8 @@
 
 use std::sync::Arc;
 
-use scene::desc::{EmissionSpectrum, LightDesc, TextureImage};
+use scene::Texture;
+use scene::desc::{EmissionSpectrum, FilmDesc, FilterDesc, Geometry, LightDesc, SpotTexture, TextureImage};
 use spectrum::Rgb;
 
 use super::Loader;
@@ -17,11 +18,13 @@ fn rgb(v: [f64; 3]) -> Rgb {
 }
 
 /// What an area emitter emits: its radiance (linear sRGB, W·m⁻²·sr⁻¹) and, when the file
-/// gives it spectrally, its spectral radiance (W·m⁻²·sr⁻¹·nm⁻¹).
+/// gives it spectrally, its spectral radiance (W·m⁻²·sr⁻¹·nm⁻¹), or, when the file gives a
+/// texture, that texture (then `radiance` is its upper bound, for messages only).
 #[derive(Clone, Debug)]
 pub(crate) struct AreaEmission {
     pub radiance: Rgb,
     pub spectrum: Option<EmissionSpectrum>,
+    pub texture: Option<Arc<Texture>>,
 }
 
 impl<'a> Loader<'a> {
@@ -31,16 +34,51 @@ impl<'a> Loader<'a> {
         if p.ty != "area" {
             return Err(p.error("only area emitters can be attached to shapes"));
         }
-        if let Some(mean) = self.untextured(&p, "radiance")? {
+        if p.named_object("radiance").is_some() {
+            let texture = self.texture_prop(&p, "radiance", 0.0, SpectrumUse::Emission)?;
             p.finish(&mut self.warnings);
-            return Ok(AreaEmission { radiance: mean, spectrum: None });
+            let bound = texture.max_value();
+            if !bound.is_finite() {
+                return Err(p.error("the radiance texture has non-finite values"));
+            }
+            return Ok(AreaEmission { radiance: bound, spectrum: None, texture: Some(Arc::new(texture)) });
         }
         let radiance = p
             .color("radiance", SpectrumUse::Emission, &mut self.warnings)?
             .ok_or_else(|| p.error("missing required property 'radiance'"))?;
         let spectrum = p.emission_spectrum("radiance")?;
         p.finish(&mut self.warnings);
-        Ok(AreaEmission { radiance: rgb(radiance), spectrum })
+        Ok(AreaEmission { radiance: rgb(radiance), spectrum, texture: None })
+    }
+
+    /// Records what the shape about to be pushed emits: its spectrum, its texture (on meshes;
+    /// on analytic shapes an error, or in a permissive load the texture's mean with a warning),
+    /// and returns its RGB radiance.
+    pub(crate) fn attach_area_emission(
+        &mut self,
+        e: AreaEmission,
+        geometry: &Geometry,
+        node: &Node,
+    ) -> Result<Rgb, SceneError> {
+        let index = self.shapes.len() as u32;
+        if let Some(spectrum) = e.spectrum {
+            self.emission_spectra.shapes.insert(index, spectrum);
+        }
+        match e.texture {
+            None => Ok(e.radiance),
+            Some(texture) if matches!(geometry, Geometry::Mesh(_)) => {
+                self.emission_spectra.textures.insert(index, texture);
+                Ok(e.radiance)
+            }
+            Some(texture) => {
+                let error = node.pos.error(
+                    "a textured 'radiance' is supported on triangle meshes only (obj, ply, serialized, \
+                     rectangle, cube), not on spheres and discs",
+                );
+                self.unsupported(error, "the texture's mean value is used")?;
+                Ok(super::textured::mean(&texture))
+            }
+        }
     }
 
     /// An emitter color with a default, and its spectrum when the file gives one (recorded for
@@ -89,19 +127,40 @@ impl<'a> Loader<'a> {
                 } else {
                     beam
                 };
-                if let Some(texture) = p.named_object("texture") {
-                    texture.take();
-                    let error = texture.node.pos.error(format!("{}: a projected 'texture' is not supported", p.what()));
-                    self.unsupported(error, "the spot light emits its uniform intensity")?;
+                let texture = match p.named_object("texture") {
+                    None => None,
+                    Some(_) => {
+                        let texture = self.texture_prop(&p, "texture", 1.0, SpectrumUse::Emission)?;
+                        if cutoff >= 90.0 {
+                            return Err(
+                                p.error(format!("a spot 'texture' needs a cutoff_angle below 90°, got {cutoff}"))
+                            );
+                        }
+                        let axis = |v: [f64; 3], name: &str| {
+                            normalize(m.vector(v))
+                                .ok_or_else(|| p.error(format!("'to_world' maps the {name} axis to zero")))
+                        };
+                        Some(SpotTexture {
+                            texture: Arc::new(texture),
+                            x_axis: to_vec3(axis([1.0, 0.0, 0.0], "x")?),
+                            y_axis: to_vec3(axis([0.0, 1.0, 0.0], "y")?),
+                        })
+                    }
+                };
+                let intensity = self.emitted(&p, "intensity", 1.0)?;
+                if texture.is_some() && self.emission_spectra.lights.contains_key(&(self.lights.len() as u32)) {
+                    return Err(p.error("a spot light with a 'texture' needs an RGB 'intensity', not a spectrum"));
                 }
                 LightDesc::Spot {
                     position: to_vec3(m.point([0.0; 3])),
                     direction: to_vec3(direction),
-                    intensity: self.emitted(&p, "intensity", 1.0)?,
+                    intensity,
                     cutoff_degrees: cutoff as f32,
                     beam_width_degrees: beam as f32,
+                    texture,
                 }
             }
+            "projector" => self.projector(&p, to_world.unwrap_or(Mat4::IDENTITY))?,
             "directional" => {
                 let direction = match (p.vector("direction")?, to_world) {
                     (Some(_), Some(_)) => return Err(p.error("give either 'direction' or 'to_world', not both")),
@@ -136,6 +195,44 @@ impl<'a> Loader<'a> {
         p.finish(&mut self.warnings);
         self.lights.push(light);
         Ok(())
+    }
+
+    /// A `projector`: its frame from `to_world` (orthonormalised, scale dropped), the
+    /// `irradiance` texture (required), `scale` and the field of view of a perspective camera
+    /// whose film has the texture's resolution (1 × 1 for a constant).
+    fn projector(&mut self, p: &Plugin<'a>, m: Mat4) -> Result<LightDesc, SceneError> {
+        if p.named_object("irradiance").is_none() && p.prop("irradiance").is_none() {
+            return Err(p.error("missing required property 'irradiance'"));
+        }
+        let irradiance = self.texture_prop(p, "irradiance", 1.0, SpectrumUse::Emission)?;
+        if p.emission_spectrum("irradiance")?.is_some() {
+            return Err(p.error("a projector's 'irradiance' must be RGB or a texture, not a spectrum"));
+        }
+        let scale = p.float_or("scale", 1.0)?;
+        if !scale.is_finite() || scale < 0.0 {
+            return Err(p.error(format!("'scale' must be non-negative, got {scale}")));
+        }
+        let (width, height) = irradiance.resolution().unwrap_or((1, 1));
+        let film = FilmDesc { width, height, filter: FilterDesc::Box };
+        let fov_x = self.field_of_view(p, &film)?;
+        let bad = || p.error("'to_world' is singular");
+        let ez = normalize(m.vector([0.0, 0.0, 1.0])).ok_or_else(bad)?;
+        let y = m.vector([0.0, 1.0, 0.0]);
+        let d = dot(y, ez);
+        let ey = normalize([y[0] - d * ez[0], y[1] - d * ez[1], y[2] - d * ez[2]]).ok_or_else(bad)?;
+        // Keep the handedness of the file's x axis (a mirrored frame mirrors the image).
+        let mut ex = cross(ey, ez);
+        if dot(ex, m.vector([1.0, 0.0, 0.0])) < 0.0 {
+            ex = ex.map(|v| -v);
+        }
+        Ok(LightDesc::Projector {
+            position: to_vec3(m.point([0.0; 3])),
+            frame: [to_vec3(ex), to_vec3(ey), to_vec3(ez)],
+            irradiance: Arc::new(irradiance),
+            scale: scale as f32,
+            fov_x_degrees: fov_x as f32,
+            aspect: width as f32 / height as f32,
+        })
     }
 
     fn check_single_environment(&self, p: &Plugin) -> Result<(), SceneError> {

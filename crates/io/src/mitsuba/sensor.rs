@@ -156,7 +156,7 @@ impl<'a> Loader<'a> {
     }
 
     /// The horizontal field of view (degrees) from `fov` + `fov_axis` or `focal_length`.
-    fn field_of_view(&mut self, p: &Plugin, film: &FilmDesc) -> Result<f64, SceneError> {
+    pub(crate) fn field_of_view(&mut self, p: &Plugin, film: &FilmDesc) -> Result<f64, SceneError> {
         let fov = p.float("fov")?;
         let focal = p.string("focal_length")?;
         let axis = p.string("fov_axis")?.map(str::to_ascii_lowercase);

@@ -9,7 +9,6 @@ use scene::instance::Affine3A;
 
 use super::Loader;
 use super::Resolved;
-use super::emitter::AreaEmission;
 use super::props::Plugin;
 use super::transform::{Mat4, apply3, cross, dot, from_vec3, length, normalize, positive, to_vec3};
 use super::xml::{Node, Pos};
@@ -301,12 +300,10 @@ impl<'a> Loader<'a> {
         };
         p.finish(&mut self.warnings);
         let name = node.attr("id").map(str::to_string).unwrap_or_else(|| format!("{}#{}", p.ty, self.shapes.len()));
-        let emission = emission.map(|e: AreaEmission| {
-            if let Some(spectrum) = e.spectrum {
-                self.emission_spectra.shapes.insert(self.shapes.len() as u32, spectrum);
-            }
-            e.radiance
-        });
+        let emission = match emission {
+            Some(e) => Some(self.attach_area_emission(e, &geometry, node)?),
+            None => None,
+        };
         self.shapes.push(ShapeDesc { name, geometry, material, emission });
         Ok(())
     }

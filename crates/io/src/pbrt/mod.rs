@@ -111,6 +111,8 @@ struct GraphicsState {
     area_light: Option<Rgb>,
     /// Its spectrum, when given spectrally.
     area_light_spectrum: Option<EmissionSpectrum>,
+    /// Its radiance image (`filename`, scale applied), for triangle meshes.
+    area_light_texture: Option<Arc<Texture>>,
 }
 
 /// What a `*Begin` pushed.
@@ -186,6 +188,7 @@ impl Builder {
                 material: None,
                 area_light: None,
                 area_light_spectrum: None,
+                area_light_texture: None,
             },
             stack: Vec::new(),
             named_coordinate_systems: HashMap::new(),
@@ -1346,6 +1349,12 @@ impl Builder {
         if let (Some(_), Some(spectrum)) = (self.state.area_light, &self.state.area_light_spectrum) {
             self.emission_spectra.shapes.insert(self.shapes.len() as u32, spectrum.clone());
         }
+        if let Some(texture) = &self.state.area_light_texture {
+            if !matches!(geometry, Geometry::Mesh(_)) {
+                return Err(err(file, d.pos, "a diffuse area light with a \"filename\" image needs a triangle mesh"));
+            }
+            self.emission_spectra.textures.insert(self.shapes.len() as u32, texture.clone());
+        }
         self.shapes.push(ShapeDesc { name, geometry, material, emission: self.state.area_light });
         self.warn_unused(p);
         Ok(())
@@ -1398,17 +1407,27 @@ impl Builder {
             ));
         }
         let p = &d.params;
-        for name in ["filename", "power"] {
-            if let Some(x) = p.find(name) {
-                return Err(p.error(x.pos, format!("parameter '{name}' is not supported")));
-            }
+        if let Some(x) = p.find("power") {
+            return Err(p.error(x.pos, "parameter 'power' is not supported"));
         }
         if p.bool("twosided", false)? {
             let pos = p.find("twosided").map_or(d.pos, |x| x.pos);
             return Err(p.error(pos, "two-sided area lights are not supported (our emitters are one-sided)"));
         }
-        let (l, spectrum) = self.light_emission(p, "L")?;
         let scale = p.float("scale", 1.0)?;
+        self.state.area_light_texture = None;
+        if let Some((filename, fpos)) = p.string("filename")? {
+            if let Some(x) = p.find("L") {
+                return Err(p.error(x.pos, "'L' and 'filename' exclude each other"));
+            }
+            let texture = area_light_image(&resolve(file, &filename), scale).map_err(|e| p.error(fpos, e))?;
+            self.state.area_light = Some(texture.max_value().max(Rgb::splat(f32::MIN_POSITIVE)));
+            self.state.area_light_spectrum = None;
+            self.state.area_light_texture = Some(Arc::new(texture));
+            self.warn_unused(p);
+            return Ok(());
+        }
+        let (l, spectrum) = self.light_emission(p, "L")?;
         self.state.area_light = Some(l * scale);
         self.state.area_light_spectrum = match spectrum {
             Some(s) => Some(s.scaled(scale).map_err(|e| err(file, d.pos, e))?),
@@ -1479,6 +1498,7 @@ impl Builder {
                     intensity,
                     cutoff_degrees: cone,
                     beam_width_degrees: cone - delta,
+                    texture: None,
                 }
             }
             "distant" => {
@@ -1546,7 +1566,7 @@ impl Builder {
                 LightDesc::Point { intensity, .. } | LightDesc::Spot { intensity, .. } => *intensity,
                 LightDesc::Directional { irradiance, .. } => *irradiance,
                 LightDesc::Constant { radiance } => *radiance,
-                LightDesc::EnvMap { .. } => Rgb::BLACK,
+                LightDesc::EnvMap { .. } | LightDesc::Projector { .. } => Rgb::BLACK,
             };
             let base = scene::LightSpectrum { spectrum: s, base: unscaled };
             let scaled = base.spectrum.scaled(base.factor(value)).map_err(|e| err(file, d.pos, e))?;
@@ -1556,6 +1576,21 @@ impl Builder {
         self.warn_unused(p);
         Ok(())
     }
+}
+
+/// The radiance image of a `diffuse` area light (`filename`), times `scale`: 8-bit images
+/// sRGB-decoded, float images linear, looked up bilinearly at `(u, 1 − v)` (pbrt-v4's
+/// convention for images, as for `imagemap`) with clamped edges.
+fn area_light_image(path: &Path, scale: f32) -> Result<Texture, String> {
+    let stored = crate::read_texture_file(path).map_err(|e| format!("cannot read image: {e}"))?;
+    let image = stored.linear(crate::TextureEncoding::Srgb);
+    if let Some(v) = image.pixels.iter().flatten().find(|v| !v.is_finite() || **v < 0.0) {
+        return Err(format!("image '{}' has a negative or non-finite value {v}", path.display()));
+    }
+    let pixels = image.pixels.iter().map(|px| Rgb::from_array(px.map(|v| v * scale))).collect();
+    let image = Arc::new(TextureImage { width: image.width as u32, height: image.height as u32, pixels });
+    let to_uv = UvTransform { columns: [Vec2::new(1.0, 0.0), Vec2::new(0.0, -1.0)], translation: Vec2::new(0.0, 1.0) };
+    Ok(Texture::bitmap(image, to_uv, Sampling { wrap: WrapMode::Clamp, filter: FilterMode::Bilinear }))
 }
 
 /// A path named in `file`, relative to its directory unless absolute.

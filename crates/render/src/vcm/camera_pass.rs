@@ -117,8 +117,12 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         let Some(hit) = scene.intersect(&path.ray) else {
             // Escaped: the environment light (infinite: no distance update, §5.1).
             if let Some(index) = scene.background
-                && let Some(emitted) =
-                    scene.lights[index as usize].radiance_on_hit(path.ray.direction, Vec3::ZERO, &scene.bounding_sphere)
+                && let Some(emitted) = scene.lights[index as usize].radiance_on_hit(
+                    path.ray.direction,
+                    Vec3::ZERO,
+                    Vec3::ZERO,
+                    &scene.bounding_sphere,
+                )
                 && let pick = scene.light_pick_probability(index)
                 && let Some(weight) =
                     emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
@@ -139,8 +143,12 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
 
         // Emitter hit (s = 0).
         if let Some(light_index) = hit.light
-            && let Some(emitted) =
-                scene.lights[light_index as usize].radiance_on_hit(direction, hit.normal, &scene.bounding_sphere)
+            && let Some(emitted) = scene.lights[light_index as usize].radiance_on_hit(
+                direction,
+                hit.position,
+                hit.normal,
+                &scene.bounding_sphere,
+            )
             && let pick = scene.light_pick_probability(light_index)
             && let Some(weight) =
                 emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)

@@ -209,7 +209,9 @@ impl Material {
         match self {
             Material::Dielectric { dispersion, .. } => dispersion.is_some_and(|ior| ior.is_dispersive()),
             Material::Blend { first, second, .. } => first.is_dispersive() || second.is_dispersive(),
-            Material::TwoSided { front, back } => front.is_dispersive() || back.as_ref().is_some_and(|b| b.is_dispersive()),
+            Material::TwoSided { front, back } => {
+                front.is_dispersive() || back.as_ref().is_some_and(|b| b.is_dispersive())
+            }
             Material::NormalMap { nested, .. }
             | Material::BumpMap { nested, .. }
             | Material::TexturedRoughness { nested, .. } => nested.is_dispersive(),
