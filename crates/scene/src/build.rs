@@ -1,5 +1,6 @@
 //! Turning a [`SceneDescription`] (what a file loader produces) into a renderable [`Scene`].
 
+use crate::alpha::AlphaMask;
 use crate::camera::Camera;
 use crate::desc::{EmissionSpectrum, Geometry, LightDesc, MeshData, SceneDescription, ShapeDesc};
 use crate::filter::Filter;
@@ -56,7 +57,7 @@ impl Scene {
         }
         let primitives = std::mem::take(&mut parts.primitives);
         let (objects, instances) = build_instances(desc, &mut parts)?;
-        let Parts { attributes, mut lights, mut light_spectra, mut report, .. } = parts;
+        let Parts { attributes, alpha_masks, mut lights, mut light_spectra, mut report, .. } = parts;
         let mut environments = 0;
         for (index, light) in desc.lights.iter().enumerate() {
             if matches!(light, LightDesc::Constant { .. } | LightDesc::EnvMap { .. }) {
@@ -84,6 +85,7 @@ impl Scene {
             camera,
         )
         .with_attributes(attributes)
+        .with_alpha_masks(alpha_masks)
         .with_light_spectra(if light_spectra.iter().any(Option::is_some) { light_spectra } else { Vec::new() });
         Ok((scene, report))
     }
@@ -134,6 +136,7 @@ fn build_instances(desc: &SceneDescription, parts: &mut Parts) -> Result<(Vec<Ob
 struct Parts {
     primitives: Vec<Primitive>,
     attributes: Vec<SurfaceAttributes>,
+    alpha_masks: Vec<AlphaMask>,
     lights: Vec<Light>,
     light_spectra: Vec<Option<LightSpectrum>>,
     report: BuildReport,
@@ -176,6 +179,8 @@ impl Parts {
                 return Err(format!("shape '{}': the emission texture has non-finite values", shape.name));
             }
         }
+        let alpha = self.alpha_mask(shape)?;
+        let first_primitive = self.primitives.len();
         match &shape.geometry {
             Geometry::Mesh(mesh) => {
                 mesh.validate().map_err(|e| format!("mesh '{}': {e}", shape.name))?;
@@ -252,7 +257,33 @@ impl Parts {
                 self.report.analytic_shapes += 1;
             }
         }
+        for primitive in &mut self.primitives[first_primitive..] {
+            primitive.alpha = alpha;
+        }
         Ok(())
+    }
+
+    /// The index of the alpha mask of `shape` in `alpha_masks` (added there), or `None` when
+    /// the shape has none or its opacity is 1 everywhere. Errors when the texture has
+    /// non-finite values, or the shape emits (light sampling would pick transparent points).
+    fn alpha_mask(&mut self, shape: &ShapeDesc) -> Result<Option<u32>, String> {
+        let Some(texture) = &shape.alpha else { return Ok(None) };
+        let max = texture.max_value();
+        if !(max.r.is_finite() && max.g.is_finite() && max.b.is_finite()) {
+            return Err(format!("shape '{}': the alpha texture has non-finite values", shape.name));
+        }
+        let mask = AlphaMask::new(texture.clone());
+        if mask.constant_opacity() == Some(1.0) {
+            return Ok(None);
+        }
+        if shape.emission.is_some_and(|e| !e.is_black()) {
+            return Err(format!(
+                "shape '{}' emits light and has an alpha mask: masked emitters are not supported",
+                shape.name
+            ));
+        }
+        self.alpha_masks.push(mask);
+        Ok(Some(self.alpha_masks.len() as u32 - 1))
     }
 }
 
@@ -375,6 +406,7 @@ mod tests {
             geometry: Geometry::Mesh(mesh),
             material: 0,
             emission: Some(Rgb::splat(2.0)),
+            alpha: None,
         }];
         let (scene, report) = Scene::from_description(&description(vec![diffuse()], shapes), None).unwrap();
         assert_eq!((report.triangles, report.degenerate_triangles, report.lights), (2, 1, 2));
@@ -399,6 +431,7 @@ mod tests {
             geometry: Geometry::Sphere { center: Vec3::ZERO, radius, flip_normals: false },
             material,
             emission: None,
+            alpha: None,
         };
         let err = |d: SceneDescription| Scene::from_description(&d, None).err().unwrap();
         assert!(err(description(vec![diffuse()], vec![sphere(-1.0, 0)])).contains("ball"));

@@ -136,6 +136,9 @@ pub struct ShapeDesc {
     /// Radiance emitted from the front side (the side the geometric normal points to), if the
     /// shape is an area emitter. Emitters are one-sided, as in Mitsuba.
     pub emission: Option<Rgb>,
+    /// Opacity texture (unitless, in [0, 1]; see [`crate::alpha::AlphaMask`]) of an alpha-masked
+    /// shape (Mitsuba's `mask` BSDF, pbrt's shape `alpha`). Emitters cannot be masked.
+    pub alpha: Option<Texture>,
 }
 
 /// A light that is not attached to a shape.

@@ -47,17 +47,30 @@ impl Object {
         self.bvh.bounds()
     }
 
-    /// Nearest primitive hit along the object-space `ray` with parameter in `(0, t_max)`: its
-    /// index into [`Object::primitives`] and the parameter.
+    /// Nearest primitive hit along the object-space `ray` with parameter in `(0, t_max)` that
+    /// `keep(primitive, ray, t)` accepts (the scene's alpha test): its index into
+    /// [`Object::primitives`] and the parameter.
     #[inline]
-    pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
-        self.bvh.closest_hit(ray, t_max, |i, r, t| self.primitives[i as usize].shape.intersect(r, t))
+    pub fn closest_hit(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        keep: impl Fn(&Primitive, &Ray, f32) -> bool,
+    ) -> Option<(u32, f32)> {
+        self.bvh.closest_hit(ray, t_max, |i, r, t_max| {
+            let primitive = &self.primitives[i as usize];
+            primitive.shape.intersect(r, t_max).filter(|&t| keep(primitive, r, t))
+        })
     }
 
-    /// Whether anything of the object lies along the object-space `ray` in `(0, t_max)`.
+    /// Whether anything of the object that `keep(primitive, ray, t)` accepts lies along the
+    /// object-space `ray` in `(0, t_max)`.
     #[inline]
-    pub fn any_hit(&self, ray: &Ray, t_max: f32) -> bool {
-        self.bvh.any_hit(ray, t_max, |i, r, t| self.primitives[i as usize].shape.intersect(r, t).is_some())
+    pub fn any_hit(&self, ray: &Ray, t_max: f32, keep: impl Fn(&Primitive, &Ray, f32) -> bool) -> bool {
+        self.bvh.any_hit(ray, t_max, |i, r, t_max| {
+            let primitive = &self.primitives[i as usize];
+            primitive.shape.intersect(r, t_max).is_some_and(|t| keep(primitive, r, t))
+        })
     }
 }
 
@@ -147,10 +160,12 @@ mod tests {
         );
         let instance = Instance::new(0, to_world).unwrap();
         let ray = Ray::new(Vec3::ZERO, Vec3::X);
-        let (_, t) = unit_sphere().closest_hit(&instance.to_object_ray(&ray), f32::INFINITY).unwrap();
+        let all = |_: &Primitive, _: &Ray, _: f32| true;
+        let (_, t) = unit_sphere().closest_hit(&instance.to_object_ray(&ray), f32::INFINITY, all).unwrap();
         assert!((t - 8.0).abs() < 1e-5, "{t}");
-        assert!(!unit_sphere().any_hit(&instance.to_object_ray(&ray), 7.9));
-        assert!(unit_sphere().any_hit(&instance.to_object_ray(&ray), 8.1));
+        assert!(!unit_sphere().any_hit(&instance.to_object_ray(&ray), 7.9, all));
+        assert!(unit_sphere().any_hit(&instance.to_object_ray(&ray), 8.1, all));
+        assert!(!unit_sphere().any_hit(&instance.to_object_ray(&ray), 8.1, |_, _, _| false));
     }
 
     #[test]

@@ -4,6 +4,7 @@
 //! This crate does not know about integrators or file formats.
 
 pub mod accel;
+pub mod alpha;
 pub mod build;
 pub mod camera;
 pub mod cornell;
@@ -19,6 +20,7 @@ pub mod shape;
 pub mod tangent;
 pub mod texture;
 
+pub use alpha::AlphaMask;
 pub use camera::Camera;
 pub use film::{Film, FrameBuffer};
 pub use filter::Filter;

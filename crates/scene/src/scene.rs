@@ -9,6 +9,7 @@
 use math::{Aabb, Distribution1D, RAY_EPSILON, Ray, Vec2, Vec3};
 
 use crate::accel::Bvh;
+use crate::alpha::AlphaMask;
 use crate::camera::Camera;
 use crate::desc::EmissionSpectrum;
 use crate::instance::{Instance, Object};
@@ -29,12 +30,15 @@ pub struct Primitive {
     pub light: Option<u32>,
     /// Index into [`Scene::attributes`], or [`NO_ATTRIBUTES`].
     pub attributes: u32,
+    /// Index into [`Scene::alpha_masks`] when the surface has an alpha mask (hits where it is
+    /// transparent are skipped, see [`crate::alpha`]).
+    pub alpha: Option<u32>,
 }
 
 impl Primitive {
     /// A primitive without extra surface attributes.
     pub fn new(shape: Shape, material: u32, light: Option<u32>) -> Self {
-        Self { shape, material, light, attributes: NO_ATTRIBUTES }
+        Self { shape, material, light, attributes: NO_ATTRIBUTES, alpha: None }
     }
 }
 
@@ -110,6 +114,8 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// Placements of [`Scene::objects`].
     pub instances: Vec<Instance>,
+    /// Alpha masks referenced by [`Primitive::alpha`] (of world and object primitives alike).
+    pub alpha_masks: Vec<AlphaMask>,
     /// Emission spectra by light index (missing or `None`: the RGB value is upsampled).
     light_spectra: Vec<Option<LightSpectrum>>,
     /// Light selection: proportional to each light's emitted power.
@@ -167,6 +173,7 @@ impl Scene {
             attributes: Vec::new(),
             objects,
             instances,
+            alpha_masks: Vec::new(),
             light_spectra: Vec::new(),
             light_selection,
             bvh,
@@ -176,6 +183,12 @@ impl Scene {
     /// Sets the surface attributes that primitives refer to.
     pub fn with_attributes(mut self, attributes: Vec<SurfaceAttributes>) -> Self {
         self.attributes = attributes;
+        self
+    }
+
+    /// Sets the alpha masks that primitives refer to.
+    pub fn with_alpha_masks(mut self, alpha_masks: Vec<AlphaMask>) -> Self {
+        self.alpha_masks = alpha_masks;
         self
     }
 
@@ -191,7 +204,8 @@ impl Scene {
         self.light_spectra.get(index as usize).and_then(Option::as_ref)
     }
 
-    /// Nearest intersection of `ray` (any distance > 0).
+    /// Nearest intersection of `ray` (any distance > 0). Hits that a primitive's alpha mask
+    /// rejects are skipped (see [`crate::alpha`]).
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
         let world_primitives = self.primitives.len() as u32;
@@ -201,11 +215,13 @@ impl Scene {
         let mut object_primitive = 0;
         let (index, distance) = self.bvh.closest_hit(ray, f32::INFINITY, |i, r, t_max| {
             if i < world_primitives {
-                return self.primitives[i as usize].shape.intersect(r, t_max);
+                let primitive = &self.primitives[i as usize];
+                return primitive.shape.intersect(r, t_max).filter(|&t| self.alpha_keeps(primitive, r, t));
             }
             let instance = &self.instances[(i - world_primitives) as usize];
             let (primitive, t) =
-                self.objects[instance.object as usize].closest_hit(&instance.to_object_ray(r), t_max)?;
+                self.objects[instance.object as usize]
+                    .closest_hit(&instance.to_object_ray(r), t_max, |p, r, t| self.alpha_keeps(p, r, t))?;
             object_primitive = primitive;
             Some(t)
         })?;
@@ -307,6 +323,7 @@ impl Scene {
 
     /// True when something blocks the segment from `point` along unit `direction` over the
     /// open interval `(ε, distance − ε)`, ε = [`RAY_EPSILON`]. `distance` may be infinite.
+    /// Hits that a primitive's alpha mask rejects do not block (see [`crate::alpha`]).
     #[inline]
     pub fn occluded(&self, point: Vec3, direction: Vec3, distance: f32) -> bool {
         let ray = Ray::new(point + RAY_EPSILON * direction, direction);
@@ -317,10 +334,12 @@ impl Scene {
         let world_primitives = self.primitives.len() as u32;
         self.bvh.any_hit(&ray, t_max, |i, r, t| {
             if i < world_primitives {
-                return self.primitives[i as usize].shape.intersect(r, t).is_some();
+                let primitive = &self.primitives[i as usize];
+                return primitive.shape.intersect(r, t).is_some_and(|t| self.alpha_keeps(primitive, r, t));
             }
             let instance = &self.instances[(i - world_primitives) as usize];
-            self.objects[instance.object as usize].any_hit(&instance.to_object_ray(r), t)
+            self.objects[instance.object as usize]
+                .any_hit(&instance.to_object_ray(r), t, |p, r, t| self.alpha_keeps(p, r, t))
         })
     }
 

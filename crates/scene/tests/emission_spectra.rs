@@ -79,8 +79,14 @@ fn diffuse() -> Material {
 /// point light with the test spectrum and a spot light without.
 fn spectral_scene(base: Rgb) -> Scene {
     let shapes = vec![
-        ShapeDesc { name: "plain".into(), geometry: quad(-1.0), material: 0, emission: Some(Rgb::splat(1.0)) },
-        ShapeDesc { name: "tabulated".into(), geometry: quad(0.0), material: 0, emission: Some(base) },
+        ShapeDesc {
+            name: "plain".into(),
+            geometry: quad(-1.0),
+            material: 0,
+            emission: Some(Rgb::splat(1.0)),
+            alpha: None,
+        },
+        ShapeDesc { name: "tabulated".into(), geometry: quad(0.0), material: 0, emission: Some(base), alpha: None },
     ];
     let lights = vec![
         LightDesc::Point { position: Vec3::new(0.0, 0.0, 2.0), intensity: base * 2.0 },
@@ -187,7 +193,8 @@ fn error(desc: &SceneDescription) -> String {
 
 #[test]
 fn bad_spectra_are_build_errors() {
-    let shape = || ShapeDesc { name: "q".into(), geometry: quad(0.0), material: 0, emission: Some(Rgb::WHITE) };
+    let shape =
+        || ShapeDesc { name: "q".into(), geometry: quad(0.0), material: 0, emission: Some(Rgb::WHITE), alpha: None };
     let mut desc = description(vec![diffuse()], vec![shape()], Vec::new());
     desc.emission_spectra.shapes.insert(3, tabulated());
     assert!(error(&desc).contains("shape 3"), "{}", error(&desc));
@@ -219,6 +226,7 @@ fn fluorescent_emission_must_not_overlap_any_absorption_band() {
         geometry: Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false },
         material,
         emission: None,
+        alpha: None,
     };
     let a = fluorescent((450.0, 30.0), (550.0, 30.0));
     // Absorbs 520–560 nm, where `a` re-emits.

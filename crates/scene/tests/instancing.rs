@@ -43,7 +43,7 @@ fn soup(rng: &mut Rng, triangles: usize) -> MeshData {
 }
 
 fn shape(name: &str, geometry: Geometry) -> ShapeDesc {
-    ShapeDesc { name: name.into(), geometry, material: 0, emission: None }
+    ShapeDesc { name: name.into(), geometry, material: 0, emission: None, alpha: None }
 }
 
 /// A world-space primitive of the flattened scene.
@@ -232,6 +232,7 @@ fn instanced_emitters_are_refused() {
                 geometry: Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false },
                 material: 0,
                 emission: Some(Rgb::splat(1.0)),
+                alpha: None,
             }],
         }],
         instances: vec![InstanceDesc { name: "i".into(), object: 0, to_world: Affine3A::IDENTITY }],

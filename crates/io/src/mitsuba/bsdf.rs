@@ -12,6 +12,7 @@ use spectrum::Rgb;
 use super::Loader;
 use super::Resolved;
 use super::colour::SpectrumUse;
+use super::mask::{Masked, twosided_parts, unmasked};
 use super::props::Plugin;
 use super::transform::Mat4;
 use super::transform::positive;
@@ -321,9 +322,11 @@ impl<'a> Loader<'a> {
     }
 
     /// A `<bsdf>` element.
-    pub(crate) fn bsdf(&mut self, node: &'a Node) -> Result<Material, SceneError> {
+    /// A `<bsdf>`: its material and, for a `mask` (or a `twosided` around one), its opacity.
+    pub(crate) fn bsdf(&mut self, node: &'a Node) -> Result<Masked, SceneError> {
         let p = Plugin::new(node)?;
         let reflectance = SpectrumUse::Reflectance;
+        let mut opacity = None;
         let material = match p.ty.as_str() {
             "diffuse" => Material::Diffuse { reflectance: self.texture_prop(&p, "reflectance", 0.5, reflectance)? },
             "conductor" | "roughconductor" => {
@@ -420,7 +423,7 @@ impl<'a> Loader<'a> {
                     return Err(p.error("missing required property 'weight'"));
                 }
                 let weight = self.texture_prop(&p, "weight", 0.5, reflectance)?;
-                let nested = self.nested_bsdfs(&p)?;
+                let nested = unmasked(&p, self.nested_bsdfs(&p)?)?;
                 outermost_maps(&p, &nested)?;
                 let [first, second]: [Material; 2] = nested.try_into().map_err(|v: Vec<Material>| {
                     p.error(format!("needs exactly two nested BSDFs, found {}", v.len()))
@@ -428,7 +431,8 @@ impl<'a> Loader<'a> {
                 Material::Blend { weight, first: Box::new(first), second: Box::new(second) }
             }
             "twosided" => {
-                let nested = self.nested_bsdfs(&p)?;
+                let (nested, nested_opacity) = twosided_parts(&p, self.nested_bsdfs(&p)?)?;
+                opacity = nested_opacity;
                 outermost_maps(&p, &nested)?;
                 let mut nested = nested.into_iter();
                 match (nested.next(), nested.next(), nested.next()) {
@@ -440,11 +444,16 @@ impl<'a> Loader<'a> {
             }
             "fluorescent" => self.fluorescent(&p)?,
             "normalmap" | "bumpmap" => self.perturbing(&p)?,
+            "mask" => {
+                let (material, mask) = self.mask(&p)?;
+                opacity = Some(mask);
+                material
+            }
             other => return Err(p.error(format!("unsupported bsdf type '{other}'"))),
         };
         p.ignore(&["sample_visible"]);
         p.finish(&mut self.warnings);
-        Ok(material)
+        Ok(Masked { material, opacity })
     }
 
     /// `<bsdf type="fluorescent">` (our extension): a Lambertian `reflectance` (colour or
@@ -490,7 +499,7 @@ impl<'a> Loader<'a> {
             let name = object.name.clone().unwrap_or_default();
             self.texture_prop(p, &name, 0.0, SpectrumUse::Unbounded)?
         };
-        let mut nested = self.nested_bsdfs(p)?.into_iter();
+        let mut nested = unmasked(p, self.nested_bsdfs(p)?)?.into_iter();
         let (Some(nested), None) = (nested.next(), nested.next()) else {
             return Err(p.error("needs exactly one nested BSDF"));
         };
@@ -509,7 +518,7 @@ impl<'a> Loader<'a> {
     }
 
     /// The nested BSDFs (inline or referenced) of a blend or two-sided BSDF, in order.
-    fn nested_bsdfs(&mut self, p: &Plugin<'a>) -> Result<Vec<Material>, SceneError> {
+    pub(crate) fn nested_bsdfs(&mut self, p: &Plugin<'a>) -> Result<Vec<Masked>, SceneError> {
         let mut out = Vec::new();
         for object in &p.objects {
             let node = object.node;

@@ -37,6 +37,7 @@
 mod bsdf;
 mod colour;
 mod emitter;
+mod mask;
 mod props;
 mod search;
 mod sensor;
@@ -107,7 +108,7 @@ pub fn load_with(path: &Path, defines: &[(String, String)], options: &LoadOption
 /// A resolved `<ref>` target.
 #[derive(Clone)]
 pub(crate) enum Resolved {
-    Bsdf(Material),
+    Bsdf(mask::Masked),
     Texture(Texture),
     /// An area emitter's radiance (and spectrum).
     AreaEmitter(AreaEmission),
@@ -134,6 +135,8 @@ pub(crate) struct Loader<'a> {
     resolving: Vec<String>,
     materials: Vec<Material>,
     material_of_id: HashMap<String, u32>,
+    /// The opacity of each material index that came from a `mask` (see `mask.rs`).
+    material_opacity: HashMap<u32, Texture>,
     default_material: Option<u32>,
     shapes: Vec<ShapeDesc>,
     /// Shape groups (`shapegroup`) built so far, and their indices by id.
@@ -163,6 +166,7 @@ impl<'a> Loader<'a> {
             resolving: Vec::new(),
             materials: Vec::new(),
             material_of_id: HashMap::new(),
+            material_opacity: HashMap::new(),
             default_material: None,
             shapes: Vec::new(),
             objects: Vec::new(),
@@ -239,7 +243,7 @@ impl<'a> Loader<'a> {
         }
         match self.resolve(id, from)? {
             Resolved::Bsdf(m) => {
-                let i = self.push_material(m);
+                let i = self.push_masked(m);
                 self.material_of_id.insert(id.to_string(), i);
                 Ok(i)
             }
@@ -253,7 +257,16 @@ impl<'a> Loader<'a> {
             return self.material_for_id(id, node);
         }
         let m = self.bsdf(node)?;
-        Ok(self.push_material(m))
+        Ok(self.push_masked(m))
+    }
+
+    /// Adds a material, remembering its opacity when it came from a mask.
+    fn push_masked(&mut self, m: mask::Masked) -> u32 {
+        let i = self.push_material(m.material);
+        if let Some(opacity) = m.opacity {
+            self.material_opacity.insert(i, opacity);
+        }
+        i
     }
 
     /// Mitsuba's default BSDF: diffuse with reflectance 0.5.

@@ -304,7 +304,8 @@ impl<'a> Loader<'a> {
             Some(e) => Some(self.attach_area_emission(e, &geometry, node)?),
             None => None,
         };
-        self.shapes.push(ShapeDesc { name, geometry, material, emission });
+        let alpha = self.material_opacity.get(&material).cloned();
+        self.shapes.push(ShapeDesc { name, geometry, material, emission, alpha });
         Ok(())
     }
 }

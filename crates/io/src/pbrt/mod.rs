@@ -50,6 +50,7 @@
 //!   materials, …);
 //!   unsupported optional parameters are warnings in [`SceneDescription::warnings`].
 
+mod alpha;
 pub mod color;
 pub mod envmap;
 mod instancing;
@@ -1346,6 +1347,7 @@ impl Builder {
             other => return Err(err(file, d.arg_pos[0], format!("unknown shape type \"{other}\""))),
         };
         let material = self.current_material();
+        let alpha = self.shape_alpha(p)?;
         if let (Some(_), Some(spectrum)) = (self.state.area_light, &self.state.area_light_spectrum) {
             self.emission_spectra.shapes.insert(self.shapes.len() as u32, spectrum.clone());
         }
@@ -1355,7 +1357,7 @@ impl Builder {
             }
             self.emission_spectra.textures.insert(self.shapes.len() as u32, texture.clone());
         }
-        self.shapes.push(ShapeDesc { name, geometry, material, emission: self.state.area_light });
+        self.shapes.push(ShapeDesc { name, geometry, material, emission: self.state.area_light, alpha });
         self.warn_unused(p);
         Ok(())
     }
