@@ -704,9 +704,10 @@ fn read_vertices<S: Source>(
     Ok(())
 }
 
-/// Appends one value to each attribute of `mesh` (a one-component value in all channels).
+/// Appends one value to each vertex attribute of `mesh` (a one-component value in all
+/// channels).
 fn push_attributes(mesh: &mut MeshData, values: &[[f32; 3]]) {
-    for (a, v) in mesh.attributes.iter_mut().zip(values) {
+    for (a, v) in mesh.attributes.iter_mut().zip(values).filter(|(a, _)| !a.per_face()) {
         a.values.push(if a.components == 1 { Rgb::splat(v[0]) } else { Rgb::from_array(*v) });
     }
 }
