@@ -172,7 +172,9 @@ fn compare(render: &(Vec<[f64; 3]>, Vec<[f64; 3]>), expected: &[Option<[f64; 3]>
     let n = a.len() as f64;
     assert!(n >= 3.0 * 100.0, "only {} pixels lie inside one triangle", n / 3.0);
     let zeros = vec![0.0; a.len()];
-    (z_test_entries(&a, &a_se, &b, &zeros, ALPHA).passed, sum / n, sum_se2.sqrt() / n)
+    let outcome = z_test_entries(&a, &a_se, &b, &zeros, ALPHA);
+    eprintln!("{} pixels: {outcome}; pooled relative error {:.5} ± {:.5}", n / 3.0, sum / n, sum_se2.sqrt() / n);
+    (outcome.passed, sum / n, sum_se2.sqrt() / n)
 }
 
 /// The pooled relative error passes at the Šidák-free level `ALPHA` (|z| < 3.29).
