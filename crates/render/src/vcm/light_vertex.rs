@@ -429,6 +429,40 @@ mod tests {
         assert_eq!(unpack_rgb(pack_rgb(Rgb::new(0.0, 1.0, 0.5))), Rgb::new(0.0, 1.0, 0.5));
     }
 
+    /// A stored vertex whose material reads a mesh attribute rebuilds the BSDF of the exact
+    /// attribute value within the packing's relative error; one whose material does not keeps
+    /// its uv exactly. A material reading a uv checkerboard tells the two apart.
+    #[test]
+    fn stored_vertices_rebuild_attribute_bsdfs() {
+        use scene::{Camera, Material, Scene, Texture};
+        let attribute =
+            Material::Diffuse { reflectance: Texture::MeshAttribute { name: "vertex_color".into(), scale: 1.0 } };
+        let checker = Material::Diffuse {
+            reflectance: Texture::Checkerboard {
+                color0: Rgb::splat(0.2),
+                color1: Rgb::splat(0.8),
+                to_uv: scene::desc::UvTransform::IDENTITY,
+            },
+        };
+        let camera = Camera::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z, Vec3::Y, 40.0, 4, 4);
+        let scene = Scene::new("t", Vec::new(), vec![attribute, checker], Vec::new(), camera);
+        assert!(scene.material_reads_mesh_attribute(0) && !scene.material_reads_mesh_attribute(1));
+        let generated = Vec3::new(0.3, 0.2, 0.9).normalize();
+        let value = |v: &LightVertex| v.bsdf(&scene, None).unwrap().evaluate(generated).unwrap().value;
+        let colour = Rgb::new(0.123_456, 0.654_321, 0.999);
+        let normal = Vec3::Z;
+        let d = VertexData { material: 0, normal, shading_normal: normal, attribute: Some(colour), ..data(3) };
+        let d = VertexData { fixed: Vec3::new(-0.6, 0.0, 0.8), ..d };
+        let exact = colour * std::f32::consts::FRAC_1_PI;
+        let got = value(&LightVertex::new(&d));
+        for (a, b) in got.to_array().into_iter().zip(exact.to_array()) {
+            assert!(((a - b) / b).abs() <= 2f32.powi(-13), "{got:?} vs {exact:?}");
+        }
+        // The checker material keeps uv (0.75, 0.25): colour1, 0.8/π.
+        let d = VertexData { material: 1, attribute: None, uv: Vec2::new(0.75, 0.25), ..d };
+        assert!((value(&LightVertex::new(&d)).r - 0.8 * std::f32::consts::FRAC_1_PI).abs() < 1e-6);
+    }
+
     #[test]
     fn permuting_into_slots_keeps_every_path() {
         let mut store = LightVertexStore::<Rgb>::default();
