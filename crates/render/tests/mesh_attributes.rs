@@ -230,7 +230,7 @@ fn a_missing_attribute_names_what_the_mesh_has() {
     let path = dir.join("missing.xml");
     std::fs::write(&path, xml).unwrap();
     let desc = io::load_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
-    let error = Scene::from_description(&desc, None).err().expect("a missing attribute must be an error");
+    let error = Scene::from_description(&desc, None).map(|_| ()).expect_err("a missing attribute must be an error");
     assert!(
         error.contains("`vertex_albedo`") && error.contains("`vertex_color`") && error.contains("`face_color`"),
         "{error}"
