@@ -202,6 +202,15 @@ impl<'a> Renderer<'a> {
                 scene.materials.len()
             ));
         }
+        if settings.vcm_settings().is_some()
+            && let Some(index) = (0..scene.materials.len())
+                .find(|&i| scene.material_reads_mesh_attribute(i as u32) && scene.materials[i].reads_uv())
+        {
+            return Err(format!(
+                "material {index} reads both a mesh attribute and a uv texture; the VCM engine's light vertices \
+                 store only one of the two (the path tracer renders it)"
+            ));
+        }
         let integrator = match (settings.algorithm, settings.vcm_settings()) {
             (_, Some(vcm)) => Integrator::Vcm(Box::new(VcmEngine::new(scene, vcm))),
             (Algorithm::EyeLight, _) => Integrator::EyeLight,

@@ -2,7 +2,9 @@
 
 use crate::alpha::AlphaMask;
 use crate::camera::Camera;
-use crate::desc::{EmissionSpectrum, Geometry, LightDesc, MeshData, SceneDescription, ShapeDesc};
+use crate::desc::{
+    EmissionSpectrum, Geometry, LightDesc, MeshAttribute, MeshData, SceneDescription, ShapeDesc, SpotTexture,
+};
 use crate::filter::Filter;
 use crate::instance::{Instance, Object};
 use crate::light::{AreaLight, Light, TexturedTriangleLight};
@@ -39,8 +41,11 @@ impl Scene {
         if width == 0 || height == 0 {
             return Err(format!("the film has no pixels ({width}×{height})"));
         }
+        let mut parts = Parts::default();
         for (index, material) in desc.materials.iter().enumerate() {
             material.validate().map_err(|e| format!("material {index}: {e}"))?;
+            let attribute = material.mesh_attribute().map_err(|e| format!("material {index}: {e}"))?;
+            parts.material_attributes.push(attribute.map(str::to_owned));
         }
         check_fluorescent_bands(&desc.materials)?;
         let spectra = &desc.emission_spectra;
@@ -50,7 +55,6 @@ impl Scene {
         if let Some(&index) = spectra.lights.keys().find(|&&i| i as usize >= desc.lights.len()) {
             return Err(format!("an emission spectrum refers to light {index} of {}", desc.lights.len()));
         }
-        let mut parts = Parts::default();
         for (shape_index, shape) in desc.shapes.iter().enumerate() {
             let index = shape_index as u32;
             parts.add_shape(shape, spectra.shapes.get(&index), spectra.textures.get(&index), desc.materials.len())?;
@@ -60,6 +64,12 @@ impl Scene {
         let Parts { attributes, alpha_masks, mut lights, mut light_spectra, mut report, .. } = parts;
         let mut environments = 0;
         for (index, light) in desc.lights.iter().enumerate() {
+            if let LightDesc::Spot { texture: Some(SpotTexture { texture: t, .. }), .. }
+            | LightDesc::Projector { irradiance: t, .. } = light
+                && let Some(name) = t.mesh_attribute()
+            {
+                return Err(format!("light {index}: a light's texture cannot read the mesh attribute `{name}`"));
+            }
             if matches!(light, LightDesc::Constant { .. } | LightDesc::EnvMap { .. }) {
                 environments += 1;
             }
@@ -140,6 +150,8 @@ struct Parts {
     lights: Vec<Light>,
     light_spectra: Vec<Option<LightSpectrum>>,
     report: BuildReport,
+    /// The mesh attribute each material reads, by material index.
+    material_attributes: Vec<Option<String>>,
 }
 
 impl Parts {
@@ -175,16 +187,27 @@ impl Parts {
             if !matches!(shape.geometry, Geometry::Mesh(_)) {
                 return Err(format!("shape '{}': textured emission is supported on triangle meshes only", shape.name));
             }
+            if let Some(name) = texture.mesh_attribute() {
+                return Err(format!(
+                    "shape '{}': an emission texture cannot read the mesh attribute `{name}`",
+                    shape.name
+                ));
+            }
             if !texture.max_value().is_finite() {
                 return Err(format!("shape '{}': the emission texture has non-finite values", shape.name));
             }
         }
         let alpha = self.alpha_mask(shape)?;
         let first_primitive = self.primitives.len();
+        let attribute_name = self.material_attributes.get(shape.material as usize).and_then(Option::as_deref);
         match &shape.geometry {
             Geometry::Mesh(mesh) => {
                 mesh.validate().map_err(|e| format!("mesh '{}': {e}", shape.name))?;
-                for (triangle, extra) in mesh_triangles(mesh) {
+                let attribute = match attribute_name {
+                    Some(name) => Some(find_attribute(mesh, name).map_err(|e| format!("shape '{}': {e}", shape.name))?),
+                    None => None,
+                };
+                for (triangle, extra) in mesh_triangles(mesh, attribute) {
                     let Some(triangle) = triangle else {
                         self.report.degenerate_triangles += 1;
                         continue;
@@ -216,6 +239,13 @@ impl Parts {
                     self.primitives.push(primitive);
                     self.report.triangles += 1;
                 }
+            }
+            _ if attribute_name.is_some() => {
+                return Err(format!(
+                    "shape '{}' is not a triangle mesh, but its material reads the mesh attribute `{}`",
+                    shape.name,
+                    attribute_name.unwrap_or_default()
+                ));
             }
             Geometry::Sphere { center, radius, flip_normals } => {
                 if !(*radius > 0.0 && radius.is_finite() && center.is_finite()) {
@@ -325,12 +355,27 @@ pub fn check_fluorescent_bands(materials: &[Material]) -> Result<(), String> {
     Ok(())
 }
 
-/// The triangles of a mesh (`None` for degenerate ones) with their vertex attributes. When the
-/// mesh has shading normals, a triangle whose winding disagrees with them is turned around, so
-/// that its geometric normal (which decides the emitting side and one-sided materials) lies on
-/// the side of its shading normals, as Mitsuba orients it.
-fn mesh_triangles(mesh: &MeshData) -> impl Iterator<Item = (Option<Triangle>, Option<SurfaceAttributes>)> + '_ {
-    mesh.triangles.iter().map(move |&[a, b, c]| {
+/// The mesh attribute `name` of `mesh`; the error lists the attributes the mesh has.
+fn find_attribute<'m>(mesh: &'m MeshData, name: &str) -> Result<&'m MeshAttribute, String> {
+    mesh.attributes.iter().find(|a| a.name == name).ok_or_else(|| {
+        let names: Vec<String> = mesh.attributes.iter().map(|a| format!("`{}`", a.name)).collect();
+        format!(
+            "its material reads the mesh attribute `{name}`, but the mesh has {}",
+            if names.is_empty() { "no attributes".to_owned() } else { format!("only {}", names.join(", ")) }
+        )
+    })
+}
+
+/// The triangles of a mesh (`None` for degenerate ones) with their vertex attributes (and the
+/// values of the mesh attribute `attribute`, if given). When the mesh has shading normals, a
+/// triangle whose winding disagrees with them is turned around, so that its geometric normal
+/// (which decides the emitting side and one-sided materials) lies on the side of its shading
+/// normals, as Mitsuba orients it.
+fn mesh_triangles<'m>(
+    mesh: &'m MeshData,
+    attribute: Option<&'m MeshAttribute>,
+) -> impl Iterator<Item = (Option<Triangle>, Option<SurfaceAttributes>)> + 'm {
+    mesh.triangles.iter().enumerate().map(move |(face, &[a, b, c])| {
         let mut index = [a as usize, b as usize, c as usize];
         let p = |i: usize| mesh.positions[i];
         let mut triangle = Triangle::new(p(index[0]), p(index[1]), p(index[2]));
@@ -346,7 +391,9 @@ fn mesh_triangles(mesh: &MeshData) -> impl Iterator<Item = (Option<Triangle>, Op
         }
         let normals = (!mesh.normals.is_empty()).then(|| index.map(|i| mesh.normals[i]));
         let uvs = (!mesh.uvs.is_empty()).then(|| index.map(|i| mesh.uvs[i]));
-        let extra = (normals.is_some() || uvs.is_some()).then_some(SurfaceAttributes::Triangle { normals, uvs });
+        let attribute = attribute.map(|a| if a.per_face() { [a.values[face]; 3] } else { index.map(|i| a.values[i]) });
+        let extra = (normals.is_some() || uvs.is_some() || attribute.is_some())
+            .then_some(SurfaceAttributes::Triangle { normals, uvs, attribute });
         (Some(triangle), extra)
     })
 }
@@ -400,6 +447,7 @@ mod tests {
             normals: vec![Vec3::Z; 4],
             uvs: vec![Vec2::new(0., 0.), Vec2::new(1., 0.), Vec2::new(1., 1.), Vec2::new(0., 1.)],
             triangles: vec![[0, 2, 1], [0, 3, 2], [0, 0, 1]],
+            attributes: Vec::new(),
         };
         let shapes = vec![ShapeDesc {
             name: "quad".into(),

@@ -102,6 +102,30 @@ pub struct MeshData {
     /// Vertex indices of each triangle; the geometric normal follows the right-hand rule
     /// `(p1 − p0) × (p2 − p0)`.
     pub triangles: Vec<[u32; 3]>,
+    /// Extra per-vertex or per-face values (Mitsuba's mesh attributes, e.g. vertex colours),
+    /// read by [`Texture::MeshAttribute`].
+    pub attributes: Vec<MeshAttribute>,
+}
+
+/// A named value per vertex or per triangle of a mesh (Mitsuba's `vertex_<name>` and
+/// `face_<name>` attributes). Values are unitless; one-component attributes are stored with
+/// the value in all three channels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshAttribute {
+    /// The name as a `mesh_attribute` texture refers to it: `vertex_<name>` or `face_<name>`.
+    pub name: String,
+    /// 1 or 3.
+    pub components: u8,
+    /// One value per vertex (`vertex_` attributes, interpolated barycentrically) or per
+    /// triangle (`face_` attributes, constant over the triangle).
+    pub values: Vec<Rgb>,
+}
+
+impl MeshAttribute {
+    /// Whether the attribute has one value per triangle rather than per vertex.
+    pub fn per_face(&self) -> bool {
+        self.name.starts_with("face_")
+    }
 }
 
 impl MeshData {
@@ -119,6 +143,18 @@ impl MeshData {
         }
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
             return Err(format!("vertex {i} has a non-finite position"));
+        }
+        for a in &self.attributes {
+            let (expected, per) = if a.per_face() {
+                (self.triangles.len(), "triangles")
+            } else if a.name.starts_with("vertex_") {
+                (n, "vertices")
+            } else {
+                return Err(format!("mesh attribute `{}` must start with `vertex_` or `face_`", a.name));
+            };
+            if a.values.len() != expected {
+                return Err(format!("mesh attribute `{}` has {} values for {expected} {per}", a.name, a.values.len()));
+            }
         }
         Ok(())
     }

@@ -29,4 +29,4 @@ pub use material::{
     Bsdf, BsdfEval, BsdfSample, LobeKind, Material, PdfPair, ReferenceMaterial, ShadingPoint, TransportMode,
 };
 pub use scene::{LightSpectrum, Primitive, Scene, SurfaceHit};
-pub use texture::{FilterMode, Sampling, Texture, WrapMode};
+pub use texture::{FilterMode, Sampling, Texture, TexturePoint, WrapMode};

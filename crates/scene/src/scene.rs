@@ -55,6 +55,9 @@ pub enum SurfaceAttributes {
         normals: Option<[Vec3; 3]>,
         /// Texture coordinates at the vertices.
         uvs: Option<[Vec2; 3]>,
+        /// Values at the vertices of the mesh attribute the triangle's material reads (all
+        /// three equal for a face attribute).
+        attribute: Option<[Rgb; 3]>,
     },
     /// The geometric normal points inward (a sphere with flipped normals).
     FlippedNormal,
@@ -71,6 +74,8 @@ pub struct SurfaceHit {
     pub shading_normal: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// The value of the mesh attribute the material reads (interpolated), black if none.
+    pub attribute: Rgb,
     /// Distance along the ray from its origin.
     pub distance: f32,
     /// Index of the primitive hit: into [`Scene::primitives`], or for a hit on an instance into
@@ -86,7 +91,12 @@ impl SurfaceHit {
     /// The local geometry a BSDF is built from.
     #[inline]
     pub fn shading_point(&self) -> ShadingPoint {
-        ShadingPoint { geometric_normal: self.normal, shading_normal: self.shading_normal, uv: self.uv }
+        ShadingPoint {
+            geometric_normal: self.normal,
+            shading_normal: self.shading_normal,
+            uv: self.uv,
+            attribute: self.attribute,
+        }
     }
 }
 
@@ -120,6 +130,8 @@ pub struct Scene {
     light_spectra: Vec<Option<LightSpectrum>>,
     /// Light selection: proportional to each light's emitted power.
     light_selection: Option<Distribution1D>,
+    /// By material index: whether the material reads a mesh attribute.
+    reads_mesh_attribute: Vec<bool>,
     bvh: Bvh,
 }
 
@@ -162,6 +174,7 @@ impl Scene {
         // Lights of zero power are never picked; if every light has zero power (or there are
         // none), nothing is.
         let light_selection = Distribution1D::new(&powers);
+        let reads_mesh_attribute = materials.iter().map(|m| matches!(m.mesh_attribute(), Ok(Some(_)))).collect();
         Self {
             name: name.into(),
             primitives,
@@ -176,8 +189,16 @@ impl Scene {
             alpha_masks: Vec::new(),
             light_spectra: Vec::new(),
             light_selection,
+            reads_mesh_attribute,
             bvh,
         }
+    }
+
+    /// Whether material `index` reads a mesh attribute ([`Material::mesh_attribute`]), whose
+    /// value [`SurfaceHit::attribute`] then holds.
+    #[inline]
+    pub fn material_reads_mesh_attribute(&self, index: u32) -> bool {
+        self.reads_mesh_attribute.get(index as usize).copied().unwrap_or(false)
     }
 
     /// Sets the surface attributes that primitives refer to.
@@ -228,12 +249,13 @@ impl Scene {
         let position = ray.at(distance);
         if index < world_primitives {
             let primitive = &self.primitives[index as usize];
-            let (normal, shading_normal, uv) = self.local_surface(primitive, position);
+            let (normal, shading_normal, uv, attribute) = self.local_surface(primitive, position);
             return Some(SurfaceHit {
                 position,
                 normal,
                 shading_normal,
                 uv,
+                attribute,
                 distance,
                 primitive: index,
                 material: primitive.material,
@@ -244,12 +266,13 @@ impl Scene {
         let instance = &self.instances[(index - world_primitives) as usize];
         let primitive = &self.objects[instance.object as usize].primitives[object_primitive as usize];
         let local_position = instance.to_object_ray(ray).at(distance);
-        let (normal, shading_normal, uv) = self.local_surface(primitive, local_position);
+        let (normal, shading_normal, uv, attribute) = self.local_surface(primitive, local_position);
         Some(SurfaceHit {
             position,
             normal: instance.normal_to_world(normal),
             shading_normal: instance.normal_to_world(shading_normal),
             uv,
+            attribute,
             distance,
             primitive: object_primitive,
             material: primitive.material,
@@ -257,15 +280,16 @@ impl Scene {
         })
     }
 
-    /// Geometric normal, shading normal and texture coordinates of `primitive` at `position`,
-    /// both in the primitive's own space (world or object).
+    /// Geometric normal, shading normal, texture coordinates and mesh attribute value of
+    /// `primitive` at `position`, the normals in the primitive's own space (world or object).
     #[inline]
-    fn local_surface(&self, primitive: &Primitive, position: Vec3) -> (Vec3, Vec3, Vec2) {
+    fn local_surface(&self, primitive: &Primitive, position: Vec3) -> (Vec3, Vec3, Vec2, Rgb) {
         let mut normal = primitive.shape.normal_at(position);
         let mut shading_normal = normal;
         let mut uv = Vec2::ZERO;
+        let mut attribute_value = Rgb::BLACK;
         match (&primitive.shape, self.attributes.get(primitive.attributes as usize)) {
-            (Shape::Triangle(t), Some(SurfaceAttributes::Triangle { normals, uvs })) => {
+            (Shape::Triangle(t), Some(SurfaceAttributes::Triangle { normals, uvs, attribute })) => {
                 let (b1, b2) = t.barycentrics(position);
                 let b0 = 1.0 - b1 - b2;
                 if let Some(n) = normals {
@@ -276,6 +300,9 @@ impl Scene {
                 }
                 if let Some(t) = uvs {
                     uv = t[0] * b0 + t[1] * b1 + t[2] * b2;
+                }
+                if let Some(a) = attribute {
+                    attribute_value = a[0] * b0 + a[1] * b1 + a[2] * b2;
                 }
             }
             // A triangle without attributes has uv (0, 0): computing barycentrics at every hit
@@ -297,7 +324,7 @@ impl Scene {
         {
             shading_normal = self.perturbed_normal(material, primitive, position, normal, shading_normal, uv);
         }
-        (normal, shading_normal, uv)
+        (normal, shading_normal, uv, attribute_value)
     }
 
     /// The shading normal of a normal- or bump-mapped `material` at a hit (see

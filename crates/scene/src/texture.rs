@@ -1,4 +1,5 @@
-//! Textures: RGB values that vary over a surface with its texture coordinates.
+//! Textures: RGB values that vary over a surface with its texture coordinates, or with a
+//! mesh attribute resolved at the hit ([`TexturePoint::attribute`]).
 
 use std::sync::Arc;
 
@@ -58,6 +59,35 @@ pub enum Texture {
         /// The blend weight.
         amount: Arc<Texture>,
     },
+    /// Mitsuba's `mesh_attribute`: the value of the mesh attribute `name` at the hit
+    /// (interpolated for `vertex_` attributes, constant per triangle for `face_` ones) times
+    /// `scale`. The scene resolves the attribute at each hit into [`TexturePoint::attribute`];
+    /// a material reads at most one attribute name. Only materials' reflectance-like textures
+    /// may use it (loaders and the scene build reject it elsewhere).
+    MeshAttribute {
+        /// `vertex_<name>` or `face_<name>`.
+        name: String,
+        /// Factor (unitless).
+        scale: f32,
+    },
+}
+
+/// Where a texture is looked up.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexturePoint {
+    /// Texture coordinates.
+    pub uv: Vec2,
+    /// The value of the mesh attribute the material reads, at the hit (black when there is
+    /// none).
+    pub attribute: Rgb,
+}
+
+impl TexturePoint {
+    /// A point without a mesh attribute.
+    #[inline]
+    pub fn at_uv(uv: Vec2) -> Self {
+        Self { uv, attribute: Rgb::BLACK }
+    }
 }
 
 /// What an image lookup does with texel coordinates outside the image.
@@ -103,9 +133,17 @@ impl Default for Sampling {
 }
 
 impl Texture {
-    /// The value at `uv`.
+    /// The value at `uv`, for textures without mesh attributes (a
+    /// [`Texture::MeshAttribute`] gives black; see [`Texture::eval_at`]).
     #[inline]
     pub fn eval(&self, uv: Vec2) -> Rgb {
+        self.eval_at(TexturePoint::at_uv(uv))
+    }
+
+    /// The value at `point`.
+    #[inline]
+    pub fn eval_at(&self, point: TexturePoint) -> Rgb {
+        let uv = point.uv;
         match self {
             Texture::Constant(value) => *value,
             Texture::Checkerboard { color0, color1, to_uv } => {
@@ -116,11 +154,52 @@ impl Texture {
             }
             Texture::Bitmap { image, to_uv } => lookup(image, to_uv.apply(uv), Sampling::DEFAULT),
             Texture::SampledBitmap { image, to_uv, sampling } => lookup(image, to_uv.apply(uv), *sampling),
-            Texture::Scale { texture, scale } => texture.eval(uv) * scale.eval(uv),
+            Texture::Scale { texture, scale } => texture.eval_at(point) * scale.eval_at(point),
             Texture::Mix { tex1, tex2, amount } => {
-                let a = amount.eval(uv).r.clamp(0.0, 1.0);
-                tex1.eval(uv) * (1.0 - a) + tex2.eval(uv) * a
+                let a = amount.eval_at(point).r.clamp(0.0, 1.0);
+                tex1.eval_at(point) * (1.0 - a) + tex2.eval_at(point) * a
             }
+            Texture::MeshAttribute { scale, .. } => point.attribute * *scale,
+        }
+    }
+
+    /// The mesh attribute the texture reads, if any (the first one found in a product or
+    /// blend).
+    pub fn mesh_attribute(&self) -> Option<&str> {
+        match self {
+            Texture::MeshAttribute { name, .. } => Some(name),
+            Texture::Scale { texture: a, scale: b } => a.mesh_attribute().or_else(|| b.mesh_attribute()),
+            Texture::Mix { tex1, tex2, amount } => {
+                tex1.mesh_attribute().or_else(|| tex2.mesh_attribute()).or_else(|| amount.mesh_attribute())
+            }
+            _ => None,
+        }
+    }
+
+    /// Calls `f` with the name of every mesh attribute the texture reads.
+    pub fn for_each_mesh_attribute<'a>(&'a self, f: &mut dyn FnMut(&'a str)) {
+        match self {
+            Texture::MeshAttribute { name, .. } => f(name),
+            Texture::Scale { texture: a, scale: b } => {
+                a.for_each_mesh_attribute(f);
+                b.for_each_mesh_attribute(f);
+            }
+            Texture::Mix { tex1, tex2, amount } => {
+                tex1.for_each_mesh_attribute(f);
+                tex2.for_each_mesh_attribute(f);
+                amount.for_each_mesh_attribute(f);
+            }
+            _ => {}
+        }
+    }
+
+    /// Whether the texture varies with the texture coordinates.
+    pub fn reads_uv(&self) -> bool {
+        match self {
+            Texture::Constant(_) | Texture::MeshAttribute { .. } => false,
+            Texture::Checkerboard { .. } | Texture::Bitmap { .. } | Texture::SampledBitmap { .. } => true,
+            Texture::Scale { texture: a, scale: b } => a.reads_uv() || b.reads_uv(),
+            Texture::Mix { tex1, tex2, amount } => tex1.reads_uv() || tex2.reads_uv() || amount.reads_uv(),
         }
     }
 
@@ -146,7 +225,7 @@ impl Texture {
     /// the parts of a product or blend); `None` for textures without a natural resolution.
     pub fn resolution(&self) -> Option<(u32, u32)> {
         match self {
-            Texture::Constant(_) | Texture::Checkerboard { .. } => None,
+            Texture::Constant(_) | Texture::Checkerboard { .. } | Texture::MeshAttribute { .. } => None,
             Texture::Bitmap { image, .. } | Texture::SampledBitmap { image, .. } => Some((image.width, image.height)),
             Texture::Scale { texture: a, scale: b } | Texture::Mix { tex1: a, tex2: b, .. } => {
                 match (a.resolution(), b.resolution()) {
@@ -158,7 +237,7 @@ impl Texture {
     }
 
     /// An upper bound of every channel over the surface (for textures without negative
-    /// values, which the loaders ensure for reflectances).
+    /// values, which the loaders ensure for reflectances); infinite for mesh attributes.
     pub fn max_value(&self) -> Rgb {
         match self {
             Texture::Constant(value) => *value,
@@ -168,6 +247,8 @@ impl Texture {
             }
             Texture::Scale { texture, scale } => texture.max_value() * scale.max_value(),
             Texture::Mix { tex1, tex2, .. } => tex1.max_value().max(tex2.max_value()),
+            // Not known without the mesh: no finite bound.
+            Texture::MeshAttribute { .. } => Rgb::splat(f32::INFINITY),
         }
     }
 }

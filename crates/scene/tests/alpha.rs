@@ -28,6 +28,7 @@ fn quad(z: f32) -> Geometry {
         normals: Vec::new(),
         uvs: vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)],
         triangles: vec![[0, 1, 2], [0, 2, 3]],
+        attributes: Vec::new(),
     })
 }
 

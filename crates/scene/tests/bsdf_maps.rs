@@ -133,6 +133,7 @@ fn mapped_point(material: &Material, t: &SurfaceTangents) -> ShadingPoint {
         geometric_normal: t.geometric_normal,
         shading_normal: material.perturbed_shading_normal(t),
         uv: t.uv,
+        attribute: spectrum::Rgb::BLACK,
     }
 }
 

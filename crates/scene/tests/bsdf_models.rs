@@ -22,7 +22,7 @@ fn tilted_point() -> ShadingPoint {
     let n = geometric_normal();
     let frame = Frame::from_z(n);
     let shading = (n + 0.18 * frame.x - 0.05 * frame.y).normalize();
-    ShadingPoint { geometric_normal: n, shading_normal: shading, uv: math::Vec2::ZERO }
+    ShadingPoint { geometric_normal: n, shading_normal: shading, uv: math::Vec2::ZERO, attribute: Rgb::BLACK }
 }
 
 fn flat_point() -> ShadingPoint {
@@ -619,8 +619,12 @@ fn plastic_follows_mitsubas_formulas() {
 #[test]
 fn two_sided_and_blend_combine_their_parts() {
     let point = tilted_point();
-    let flipped =
-        ShadingPoint { geometric_normal: -point.geometric_normal, shading_normal: -point.shading_normal, uv: point.uv };
+    let flipped = ShadingPoint {
+        geometric_normal: -point.geometric_normal,
+        shading_normal: -point.shading_normal,
+        uv: point.uv,
+        ..point
+    };
     let n = point.geometric_normal;
     let front = rough_conductor(0.3, 0.3);
     let two = Material::TwoSided { front: Box::new(front.clone()), back: Some(Box::new(diffuse())) };

@@ -46,6 +46,7 @@ fn quad(z: f32) -> Geometry {
         normals: Vec::new(),
         uvs: Vec::new(),
         triangles: vec![[0, 1, 2], [0, 2, 3]],
+        attributes: Vec::new(),
     })
 }
 

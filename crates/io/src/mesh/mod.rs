@@ -80,6 +80,15 @@ pub fn parse_obj(bytes: &[u8], path: &Path) -> Result<MeshData, SceneError> {
 /// list property `vertex_indices` (or `vertex_index`) with integer counts and indices; faces
 /// become triangle fans. Any scalar type is accepted for any property; other properties and
 /// elements are skipped. In ASCII files, data after the last element is an error.
+///
+/// Other scalar properties of `vertex` and `face` become [`scene::desc::MeshAttribute`]s as
+/// Mitsuba 3 groups them: `r g b` or `red green blue` (an alpha channel is dropped) is
+/// `vertex_color` / `face_color`; consecutive properties `<p>_x <p>_y <p>_z`, `<p>_0 <p>_1 <p>_2`,
+/// `<p>_1 <p>_2 <p>_3` (three components) or just the first of a row (one component) are
+/// `vertex_<p>` / `face_<p>`, and `<p>_r <p>_g <p>_b` is `vertex_<p>_color`; groups of two or four
+/// and out-of-order suffixes are skipped. Integer values are divided by their type's largest
+/// value and sRGB-decoded (Mitsuba reads integer PLY fields so); floats are kept. Face values
+/// are repeated for every triangle of the face's fan. A non-finite value is an error.
 pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<MeshData, SceneError> {
     let mesh = ply::parse(bytes, path)?;
     finish(mesh, path)

@@ -275,7 +275,13 @@ impl Builder {
         } else {
             self.normals.clear();
         }
-        Ok(MeshData { positions: self.positions, normals: self.normals, uvs: self.uvs, triangles: self.triangles })
+        Ok(MeshData {
+            positions: self.positions,
+            normals: self.normals,
+            uvs: self.uvs,
+            triangles: self.triangles,
+            attributes: Vec::new(),
+        })
     }
 }
 

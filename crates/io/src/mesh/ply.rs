@@ -4,7 +4,10 @@ use std::fmt;
 use std::path::Path;
 
 use math::{Vec2, Vec3};
-use scene::desc::MeshData;
+use scene::desc::{MeshAttribute, MeshData};
+use spectrum::Rgb;
+
+mod attributes;
 
 use super::{plural, repair_normals};
 use crate::scene_error::SceneError;
@@ -376,7 +379,39 @@ enum Role {
     Position(usize),
     Normal(usize),
     Uv(usize),
+    /// Component `.1` of mesh attribute `.0`.
+    Attribute(usize, usize),
     Skip,
+}
+
+/// What a face property is used for.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum FaceRole {
+    Indices,
+    /// Component `.1` of mesh attribute `.0`.
+    Attribute(usize, usize),
+    Skip,
+}
+
+/// Sets the roles of the properties of attribute groups `groups`, numbering them from `first`,
+/// and adds the (empty) attributes to `mesh`.
+fn assign_groups<R: Copy>(
+    groups: &[attributes::Group],
+    roles: &mut [R],
+    role: impl Fn(usize, usize) -> R,
+    mesh: &mut MeshData,
+) {
+    for group in groups {
+        let slot = mesh.attributes.len();
+        for (channel, &i) in group.properties.iter().enumerate() {
+            roles[i] = role(slot, channel);
+        }
+        mesh.attributes.push(MeshAttribute {
+            name: group.name.clone(),
+            components: group.properties.len() as u8,
+            values: Vec::new(),
+        });
+    }
 }
 
 /// Texture coordinate property names, in order of preference.
@@ -453,12 +488,18 @@ fn read_body<S: Source>(source: &mut S, header: &Header, path: &Path) -> Result<
     if header.elements[face].count == 0 {
         return Err(SceneError::at_line(path, header.elements[face].line, "the file has no faces"));
     }
-    let roles = vertex_roles(&header.elements[vertex], path)?;
+    let mut mesh = MeshData::default();
+    let mut roles = vertex_roles(&header.elements[vertex], path)?;
     let has_normals = roles.contains(&Role::Normal(0));
     let has_uvs = roles.contains(&Role::Uv(0));
-    let face_roles = face_roles(&header.elements[face], path)?;
+    let taken: Vec<bool> = roles.iter().map(|r| *r != Role::Skip).collect();
+    let groups = attributes::groups(&header.elements[vertex], &taken, "vertex_");
+    assign_groups(&groups, &mut roles, Role::Attribute, &mut mesh);
+    let mut face_roles = face_roles(&header.elements[face], path)?;
+    let taken: Vec<bool> = face_roles.iter().map(|r| *r != FaceRole::Skip).collect();
+    let groups = attributes::groups(&header.elements[face], &taken, "face_");
+    assign_groups(&groups, &mut face_roles, FaceRole::Attribute, &mut mesh);
 
-    let mut mesh = MeshData::default();
     for element in &header.elements {
         if element.properties.is_empty() {
             continue;
@@ -526,8 +567,8 @@ fn vertex_roles(element: &Element, path: &Path) -> Result<Vec<Role>, SceneError>
     Ok(roles)
 }
 
-/// For the face element: whether each property is the vertex index list.
-fn face_roles(element: &Element, path: &Path) -> Result<Vec<bool>, SceneError> {
+/// For the face element: which property is the vertex index list (the others are skipped).
+fn face_roles(element: &Element, path: &Path) -> Result<Vec<FaceRole>, SceneError> {
     let index = element
         .properties
         .iter()
@@ -551,7 +592,7 @@ fn face_roles(element: &Element, path: &Path) -> Result<Vec<bool>, SceneError> {
             ));
         }
     }
-    Ok((0..element.properties.len()).map(|i| i == index).collect())
+    Ok((0..element.properties.len()).map(|i| if i == index { FaceRole::Indices } else { FaceRole::Skip }).collect())
 }
 
 /// Reads one value of instance `i` of `element`, turning failures into errors.
@@ -613,6 +654,10 @@ fn read_vertices<S: Source>(
     if has_uvs {
         mesh.uvs.reserve_exact(count);
     }
+    let mut attribute = vec![[0.0f32; 3]; mesh.attributes.len()];
+    for a in &mut mesh.attributes {
+        a.values.reserve_exact(count);
+    }
     for i in 0..element.count {
         let mut position = [0.0f32; 3];
         let mut normal = [0.0f32; 3];
@@ -625,8 +670,12 @@ fn read_vertices<S: Source>(
                     continue;
                 }
             };
-            let x = value(source, scalar, element, i)? as f32;
+            let raw = value(source, scalar, element, i)?;
+            let x = raw as f32;
             match role {
+                Role::Attribute(slot, channel) => {
+                    attribute[slot][channel] = attribute_value(source, raw, scalar, element, i, property)?;
+                }
                 Role::Position(axis) => {
                     if !x.is_finite() {
                         return Err(source.error(format!("vertex {i} has a non-finite position")));
@@ -650,23 +699,56 @@ fn read_vertices<S: Source>(
         if has_uvs {
             mesh.uvs.push(Vec2::from_array(uv));
         }
+        push_attributes(mesh, &attribute);
     }
     Ok(())
+}
+
+/// Appends one value to each vertex attribute of `mesh` (a one-component value in all
+/// channels).
+fn push_attributes(mesh: &mut MeshData, values: &[[f32; 3]]) {
+    for (a, v) in mesh.attributes.iter_mut().zip(values).filter(|(a, _)| !a.per_face()) {
+        a.values.push(if a.components == 1 { Rgb::splat(v[0]) } else { Rgb::from_array(*v) });
+    }
+}
+
+/// An attribute's value ([`attributes::value`]); non-finite values are errors.
+fn attribute_value<S: Source>(
+    source: &S,
+    raw: f64,
+    scalar: Scalar,
+    element: &Element,
+    i: u64,
+    property: &Property,
+) -> Result<f32, SceneError> {
+    let x = attributes::value(raw, scalar);
+    if !x.is_finite() {
+        return Err(source.error(format!("{} {i} has a non-finite `{}`", element.name, property.name)));
+    }
+    Ok(x)
 }
 
 fn read_faces<S: Source>(
     source: &mut S,
     element: &Element,
-    is_indices: &[bool],
+    roles: &[FaceRole],
     vertex_count: u64,
     mesh: &mut MeshData,
 ) -> Result<(), SceneError> {
     // The count was checked against the data size; a fan has at least one triangle.
     mesh.triangles.reserve(element.count as usize);
     let mut face = Vec::new();
+    let mut attribute = vec![[0.0f32; 3]; mesh.attributes.len()];
+    let first_face_attribute = mesh.attributes.iter().position(MeshAttribute::per_face).unwrap_or(usize::MAX);
     for i in 0..element.count {
-        for (property, &indices) in element.properties.iter().zip(is_indices) {
-            let (Kind::List { count, item }, true) = (property.kind, indices) else {
+        face.clear();
+        for (property, &role) in element.properties.iter().zip(roles) {
+            if let (FaceRole::Attribute(slot, channel), Kind::Scalar(scalar)) = (role, property.kind) {
+                let raw = value(source, scalar, element, i)?;
+                attribute[slot][channel] = attribute_value(source, raw, scalar, element, i, property)?;
+                continue;
+            }
+            let (Kind::List { count, item }, FaceRole::Indices) = (property.kind, role) else {
                 skip_property(source, property.kind, element, i)?;
                 continue;
             };
@@ -674,7 +756,6 @@ fn read_faces<S: Source>(
             if n < 3 {
                 return Err(source.error(format!("face {i} has {n} vertices (at least 3 are needed)")));
             }
-            face.clear();
             for _ in 0..n {
                 let index = value(source, item, element, i)?;
                 if index < 0.0 || index >= vertex_count as f64 {
@@ -685,8 +766,12 @@ fn read_faces<S: Source>(
                 }
                 face.push(index as u32);
             }
-            for k in 1..face.len() - 1 {
-                mesh.triangles.push([face[0], face[k], face[k + 1]]);
+        }
+        // One triangle per fan corner, each with the face's attribute values.
+        for k in 1..face.len() - 1 {
+            mesh.triangles.push([face[0], face[k], face[k + 1]]);
+            for (a, v) in mesh.attributes.iter_mut().zip(&attribute).skip(first_face_attribute) {
+                a.values.push(if a.components == 1 { Rgb::splat(v[0]) } else { Rgb::from_array(*v) });
             }
         }
     }

@@ -224,7 +224,7 @@ pub(super) fn parse(bytes: &[u8], shape_index: u32, path: &Path) -> Result<MeshD
     } else if has_normals {
         repair_normals(&positions, &triangles, &mut normals, None);
     }
-    Ok(MeshData { positions, normals, uvs, triangles })
+    Ok(MeshData { positions, normals, uvs, triangles, attributes: Vec::new() })
 }
 
 /// Little-endian floats of either precision from a buffer known to be long enough.

@@ -295,6 +295,18 @@ impl<'a> Loader<'a> {
                 };
                 Texture::Constant(rgb(value))
             }
+            // The value of a PLY attribute at the hit; the scene checks that the shape has it.
+            "mesh_attribute" => {
+                let name = p.string_required("name")?;
+                if !(name.starts_with("vertex_") || name.starts_with("face_")) {
+                    return Err(p.error(format!("mesh attribute name '{name}' must start with 'vertex_' or 'face_'")));
+                }
+                let scale = p.float_or("scale", 1.0)?;
+                if !scale.is_finite() {
+                    return Err(p.error(format!("scale {scale} is not finite")));
+                }
+                Texture::MeshAttribute { name: name.to_owned(), scale: scale as f32 }
+            }
             other => return Err(p.error(format!("unsupported texture type '{other}'"))),
         };
         p.finish(&mut self.warnings);

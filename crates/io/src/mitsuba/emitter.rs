@@ -37,6 +37,9 @@ impl<'a> Loader<'a> {
         if p.named_object("radiance").is_some() {
             let texture = self.texture_prop(&p, "radiance", 0.0, SpectrumUse::Emission)?;
             p.finish(&mut self.warnings);
+            if let Some(name) = texture.mesh_attribute() {
+                return Err(p.error(format!("an emitter cannot read the mesh attribute '{name}' (only bsdfs can)")));
+            }
             let bound = texture.max_value();
             if !bound.is_finite() {
                 return Err(p.error("the radiance texture has non-finite values"));

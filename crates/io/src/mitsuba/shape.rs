@@ -26,6 +26,7 @@ pub(crate) fn rectangle_mesh() -> MeshData {
         normals: Vec::new(),
         uvs: vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)],
         triangles: vec![[0, 1, 2], [2, 3, 0]],
+        attributes: Vec::new(),
     }
 }
 

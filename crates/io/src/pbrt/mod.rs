@@ -1275,6 +1275,7 @@ impl Builder {
                         v.chunks(2).map(|t| Vec2::new(t[0] as f32, t[1] as f32)).collect()
                     }),
                     triangles,
+                    attributes: Vec::new(),
                 };
                 Geometry::Mesh(self.to_world_mesh(file, d.pos, object)?)
             }

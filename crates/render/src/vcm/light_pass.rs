@@ -80,6 +80,7 @@ pub fn trace_light_path<S: SpectralMode>(
                     normal: hit.normal,
                     shading_normal: hit.shading_normal,
                     uv: hit.uv,
+                    attribute: scene.material_reads_mesh_attribute(hit.material).then_some(hit.attribute),
                     fixed,
                     continuation: bsdf.continuation_probability(),
                     terminated: path.terminated,

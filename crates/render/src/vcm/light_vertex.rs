@@ -15,6 +15,12 @@
 //!   exact algebra (the recursion is linear), so only float rounding differs;
 //! - material index (21 bits), path length (10 bits) and the termination flag share one word.
 //!
+//! - texture coordinates share their 8 bytes with the mesh attribute value
+//!   ([`scene::Texture::MeshAttribute`]): a vertex whose material reads a mesh attribute (such a
+//!   material reads no uv texture in VCM, the driver checks) stores the attribute's three
+//!   channels rounded to the 21 most significant bits of their `f32` (sign, exponent and
+//!   12 mantissa bits: relative error ≤ 2⁻¹³ ≈ 1.2·10⁻⁴), others store uv exactly.
+//!
 //! A [`LightVertex`] is its [`MergeRecord`] (what merging reads) plus normals and texture
 //! coordinates; the memory-efficient mode keeps only the records.
 //!
@@ -103,8 +109,9 @@ pub struct LightVertex<S: SpectralMode = Rgb> {
     /// Octahedral codes of the geometric and the shading normal.
     normal: u32,
     shading_normal: u32,
-    /// Texture coordinates.
-    pub uv: Vec2,
+    /// Texture coordinates (the bits of `u` and `v`), or the packed mesh attribute value (see
+    /// the module doc).
+    texture: [u32; 2],
 }
 
 impl<S: SpectralMode> AsRef<MergeRecord<S>> for LightVertex<S> {
@@ -133,6 +140,9 @@ pub struct VertexData<S> {
     pub shading_normal: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// The mesh attribute value at the vertex when its material reads one
+    /// ([`Scene::material_reads_mesh_attribute`]); it is then stored instead of `uv`.
+    pub attribute: Option<Rgb>,
     /// Unit direction towards the previous vertex (the BSDF's fixed direction).
     pub fixed: Vec3,
     /// Russian-roulette continuation probability of the vertex's BSDF.
@@ -162,17 +172,33 @@ impl<S: SpectralMode> LightVertex<S> {
             record,
             normal: octahedral::encode(data.normal),
             shading_normal: octahedral::encode(data.shading_normal),
-            uv: data.uv,
+            texture: match data.attribute {
+                Some(value) => pack_rgb(value),
+                None => [data.uv.x.to_bits(), data.uv.y.to_bits()],
+            },
         }
+    }
+
+    /// Texture coordinates (meaningless when the material reads a mesh attribute).
+    #[inline]
+    pub fn uv(&self) -> Vec2 {
+        Vec2::new(f32::from_bits(self.texture[0]), f32::from_bits(self.texture[1]))
     }
 
     /// Rebuilds the vertex's BSDF (importance transport) at the hero wavelength `hero`.
     #[inline]
     pub fn bsdf(&self, scene: &Scene, hero: Option<f32>) -> Option<Bsdf> {
+        let material = self.record.material();
+        let (uv, attribute) = if scene.material_reads_mesh_attribute(material) {
+            (Vec2::ZERO, unpack_rgb(self.texture))
+        } else {
+            (self.uv(), Rgb::BLACK)
+        };
         let point = ShadingPoint {
             geometric_normal: octahedral::decode(self.normal),
             shading_normal: octahedral::decode(self.shading_normal),
-            uv: self.uv,
+            uv,
+            attribute,
         };
         let material = &scene.materials[self.record.material() as usize];
         Bsdf::new_at(material, &point, self.record.fixed(), TransportMode::Importance, hero)
@@ -181,8 +207,32 @@ impl<S: SpectralMode> LightVertex<S> {
     /// The vertex's fluorescence, if its material is fluorescent.
     #[inline]
     pub fn fluorescent<'s>(&self, scene: &'s Scene) -> Option<crate::fluorescent::FluorescentVertex<'s>> {
-        crate::fluorescent::FluorescentVertex::at(&scene.materials[self.record.material() as usize], self.uv)
+        crate::fluorescent::FluorescentVertex::at(&scene.materials[self.record.material() as usize], self.uv())
     }
+}
+
+/// Low bits dropped from each channel's `f32` by [`pack_rgb`].
+const DROPPED_BITS: u32 = 11;
+
+/// Three channels rounded to 21 bits each, in 63 bits.
+#[inline]
+fn pack_rgb(value: Rgb) -> [u32; 2] {
+    let channel = |x: f32| -> u64 {
+        let bits = x.to_bits();
+        // Round to nearest on the magnitude (a carry into the exponent is correct rounding).
+        let rounded = (bits & 0x7fff_ffff).saturating_add(1 << (DROPPED_BITS - 1)).min(0x7f80_0000);
+        u64::from(((bits & 0x8000_0000) | rounded) >> DROPPED_BITS)
+    };
+    let packed = channel(value.r) | channel(value.g) << 21 | channel(value.b) << 42;
+    [packed as u32, (packed >> 32) as u32]
+}
+
+/// The inverse of [`pack_rgb`] (up to its rounding).
+#[inline]
+fn unpack_rgb(texture: [u32; 2]) -> Rgb {
+    let packed = u64::from(texture[0]) | u64::from(texture[1]) << 32;
+    let channel = |shift: u32| f32::from_bits((((packed >> shift) & 0x1f_ffff) as u32) << DROPPED_BITS);
+    Rgb::new(channel(0), channel(21), channel(42))
 }
 
 /// The vertices of one light sub-path, wherever they are stored.
@@ -331,6 +381,7 @@ mod tests {
             normal: Vec3::new(0.3, -0.4, 0.866).normalize(),
             shading_normal: Vec3::new(0.2, -0.5, 0.8).normalize(),
             uv: Vec2::new(0.1 * f, 12.5),
+            attribute: None,
             fixed: Vec3::new(-0.6, 0.0, 0.8),
             continuation: 0.75,
             terminated: i % 2 == 1,
@@ -344,7 +395,7 @@ mod tests {
             let d = data(i);
             let v = LightVertex::new(&d);
             let r = &v.record;
-            assert_eq!((r.position, r.throughput, v.uv, r.continuation), (d.position, d.throughput, d.uv, 0.75));
+            assert_eq!((r.position, r.throughput, v.uv(), r.continuation), (d.position, d.throughput, d.uv, 0.75));
             assert_eq!((r.material(), r.path_length(), r.terminated()), (d.material, d.path_length, d.terminated));
             assert!(r.fixed().angle_between(d.fixed) < octahedral::MAX_ANGULAR_ERROR);
             // dVC, dVM come back from cVC, cVM for any constants (eqs. 62, 63).
@@ -356,6 +407,60 @@ mod tests {
         let d = VertexData { material: u32::MAX, path_length: 5000, terminated: false, ..data(1) };
         let r = LightVertex::new(&d).record;
         assert_eq!((r.material(), r.path_length(), r.terminated()), (MAX_MATERIAL, MAX_PATH_LENGTH, false));
+    }
+
+    /// Mesh attribute values come back within the documented relative error 2⁻¹³, signs and
+    /// zeros exactly; a deliberately coarser bound (2⁻¹⁴) is exceeded somewhere.
+    #[test]
+    fn packed_attributes_round_trip() {
+        let mut worst = 0.0f64;
+        let mut rng = math::Rng::for_stream(7, 0, 0);
+        for i in 0..20_000 {
+            let x = |rng: &mut math::Rng| (rng.uniform() * 2.0 - 0.5) * 10f32.powi(i % 7 - 3);
+            let value = Rgb::new(x(&mut rng), x(&mut rng), x(&mut rng));
+            let back = unpack_rgb(pack_rgb(value));
+            for (a, b) in value.to_array().into_iter().zip(back.to_array()) {
+                assert_eq!(a.is_sign_negative(), b.is_sign_negative());
+                worst = worst.max(((f64::from(b) - f64::from(a)) / f64::from(a)).abs());
+            }
+        }
+        assert!(worst <= 2f64.powi(-13), "relative error {worst}");
+        assert!(worst > 2f64.powi(-14), "relative error {worst}");
+        assert_eq!(unpack_rgb(pack_rgb(Rgb::new(0.0, 1.0, 0.5))), Rgb::new(0.0, 1.0, 0.5));
+    }
+
+    /// A stored vertex whose material reads a mesh attribute rebuilds the BSDF of the exact
+    /// attribute value within the packing's relative error; one whose material does not keeps
+    /// its uv exactly. A material reading a uv checkerboard tells the two apart.
+    #[test]
+    fn stored_vertices_rebuild_attribute_bsdfs() {
+        use scene::{Camera, Material, Scene, Texture};
+        let attribute =
+            Material::Diffuse { reflectance: Texture::MeshAttribute { name: "vertex_color".into(), scale: 1.0 } };
+        let checker = Material::Diffuse {
+            reflectance: Texture::Checkerboard {
+                color0: Rgb::splat(0.2),
+                color1: Rgb::splat(0.8),
+                to_uv: scene::desc::UvTransform::IDENTITY,
+            },
+        };
+        let camera = Camera::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z, Vec3::Y, 40.0, 4, 4);
+        let scene = Scene::new("t", Vec::new(), vec![attribute, checker], Vec::new(), camera);
+        assert!(scene.material_reads_mesh_attribute(0) && !scene.material_reads_mesh_attribute(1));
+        let generated = Vec3::new(0.3, 0.2, 0.9).normalize();
+        let value = |v: &LightVertex| v.bsdf(&scene, None).unwrap().evaluate(generated).unwrap().value;
+        let colour = Rgb::new(0.123_456, 0.654_321, 0.999);
+        let normal = Vec3::Z;
+        let d = VertexData { material: 0, normal, shading_normal: normal, attribute: Some(colour), ..data(3) };
+        let d = VertexData { fixed: Vec3::new(-0.6, 0.0, 0.8), ..d };
+        let exact = colour * std::f32::consts::FRAC_1_PI;
+        let got = value(&LightVertex::new(&d));
+        for (a, b) in got.to_array().into_iter().zip(exact.to_array()) {
+            assert!(((a - b) / b).abs() <= 2f32.powi(-13), "{got:?} vs {exact:?}");
+        }
+        // The checker material keeps uv (0.75, 0.25): colour1, 0.8/π.
+        let d = VertexData { material: 1, attribute: None, uv: Vec2::new(0.75, 0.25), ..d };
+        assert!((value(&LightVertex::new(&d)).r - 0.8 * std::f32::consts::FRAC_1_PI).abs() < 1e-6);
     }
 
     #[test]

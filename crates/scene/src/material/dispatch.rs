@@ -5,7 +5,7 @@
 //! model is one new file, one arm in [`Model`], one line in `each_model!` and the `from_leaf`
 //! arm (plus the `Material` variant and the loader lines).
 
-use math::{Vec2, Vec3};
+use math::Vec3;
 use spectrum::Rgb;
 
 use super::conductor::Conductor;
@@ -19,6 +19,7 @@ use super::rough_dielectric::RoughDielectric;
 use super::rough_plastic::RoughPlastic;
 use super::shading::TransportMode;
 use super::thin_dielectric::ThinDielectric;
+use crate::texture::TexturePoint;
 
 /// One leaf scattering model with its textures evaluated, in a local frame whose z axis is the
 /// (possibly flipped) shading normal. Every pdf is a solid-angle density (1/sr) of the local
@@ -105,7 +106,7 @@ impl Model {
     /// `(α_u, α_v)` (textured roughness).
     pub(super) fn from_leaf(
         material: &Material,
-        uv: Vec2,
+        uv: TexturePoint,
         hero: Option<f32>,
         alpha: Option<(f32, f32)>,
     ) -> Option<Model> {
@@ -116,16 +117,16 @@ impl Model {
             | Material::NormalMap { .. }
             | Material::BumpMap { .. }
             | Material::TexturedRoughness { .. } => return None,
-            Material::Diffuse { reflectance } => Model::Diffuse(Diffuse { reflectance: reflectance.eval(uv) }),
+            Material::Diffuse { reflectance } => Model::Diffuse(Diffuse { reflectance: reflectance.eval_at(uv) }),
             // Unit reflectance: the integrators apply the diagonal reflectance and the
             // re-emission themselves.
             Material::Fluorescent { .. } => Model::Diffuse(Diffuse { reflectance: Rgb::WHITE }),
             Material::Conductor { eta, k, specular_reflectance } => {
-                Model::Conductor(Conductor { eta: *eta, k: *k, specular: specular_reflectance.eval(uv) })
+                Model::Conductor(Conductor { eta: *eta, k: *k, specular: specular_reflectance.eval_at(uv) })
             }
             Material::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance } => {
                 let (alpha_u, alpha_v) = alpha.unwrap_or((*alpha_u, *alpha_v));
-                Model::RoughConductor(RoughConductor::new(alpha_u, alpha_v, *eta, *k, specular_reflectance.eval(uv)))
+                Model::RoughConductor(RoughConductor::new(alpha_u, alpha_v, *eta, *k, specular_reflectance.eval_at(uv)))
             }
             Material::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance, dispersion } => {
                 Model::Dielectric(Dielectric::new(
@@ -133,16 +134,16 @@ impl Model {
                     *ext_ior,
                     dispersion.as_ref(),
                     hero,
-                    specular_reflectance.eval(uv),
-                    specular_transmittance.eval(uv),
+                    specular_reflectance.eval_at(uv),
+                    specular_transmittance.eval_at(uv),
                 ))
             }
             Material::ThinDielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance } => {
                 Model::ThinDielectric(ThinDielectric::new(
                     *int_ior,
                     *ext_ior,
-                    specular_reflectance.eval(uv),
-                    specular_transmittance.eval(uv),
+                    specular_reflectance.eval_at(uv),
+                    specular_transmittance.eval_at(uv),
                 ))
             }
             Material::RoughDielectric {
@@ -157,13 +158,13 @@ impl Model {
                 alpha.map_or(*alpha_v, |a| a.1),
                 *int_ior,
                 *ext_ior,
-                specular_reflectance.eval(uv),
-                specular_transmittance.eval(uv),
+                specular_reflectance.eval_at(uv),
+                specular_transmittance.eval_at(uv),
             )),
             Material::Plastic { diffuse_reflectance, specular_reflectance, int_ior, ext_ior, nonlinear } => {
                 Model::Plastic(Plastic::new(
-                    diffuse_reflectance.eval(uv),
-                    specular_reflectance.eval(uv),
+                    diffuse_reflectance.eval_at(uv),
+                    specular_reflectance.eval_at(uv),
                     *int_ior,
                     *ext_ior,
                     *nonlinear,
@@ -178,8 +179,8 @@ impl Model {
                 nonlinear,
             } => Model::RoughPlastic(RoughPlastic::new(
                 alpha.map_or(*alpha_plastic, |a| a.0),
-                diffuse_reflectance.eval(uv),
-                specular_reflectance.eval(uv),
+                diffuse_reflectance.eval_at(uv),
+                specular_reflectance.eval_at(uv),
                 *int_ior,
                 *ext_ior,
                 *nonlinear,

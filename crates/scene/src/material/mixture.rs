@@ -6,7 +6,7 @@
 //! albedo, at most 1). All pdfs it returns are solid-angle densities including the component
 //! and lobe selection probabilities; delta lobes report their selection probability.
 
-use math::{Frame, PdfW, Vec2, Vec3};
+use math::{Frame, PdfW, Vec3};
 use spectrum::Rgb;
 
 use super::MAX_COMPONENTS;
@@ -16,6 +16,7 @@ use super::dispatch::Model;
 use super::lobe::Sampled;
 use super::query::{BsdfEval, BsdfSample, PdfPair};
 use super::shading::{ShadingPoint, TransportMode, consistent};
+use crate::texture::TexturePoint;
 
 /// The BSDF of every material but [`Material::Reference`]: a weighted sum of leaf models
 /// (more than one only for blends), oriented by the shading normal.
@@ -121,7 +122,7 @@ impl ModelBsdf {
             count: 0,
             components: [empty; MAX_COMPONENTS],
         };
-        bsdf.add(material, point.uv, 1.0, 1.0, hero);
+        bsdf.add(material, TexturePoint { uv: point.uv, attribute: point.attribute }, 1.0, 1.0, hero);
 
         let mut total_weight = 0.0;
         let mut albedo = Rgb::BLACK;
@@ -153,13 +154,13 @@ impl ModelBsdf {
     }
 
     /// Adds the leaves of `material` with blend weight `scale`, on side `side`.
-    fn add(&mut self, material: &Material, uv: Vec2, scale: f32, side: f32, hero: Option<f32>) {
+    fn add(&mut self, material: &Material, uv: TexturePoint, scale: f32, side: f32, hero: Option<f32>) {
         if !positive(scale) {
             return;
         }
         match material {
             Material::Blend { weight, first, second } => {
-                let w = weight.eval(uv).r;
+                let w = weight.eval_at(uv).r;
                 let w = if w.is_nan() { 0.0 } else { w.clamp(0.0, 1.0) };
                 self.add(first, uv, scale * (1.0 - w), side, hero);
                 self.add(second, uv, scale * w, side, hero);
@@ -177,7 +178,7 @@ impl ModelBsdf {
             }
             Material::TexturedRoughness { alpha_u, alpha_v, remap, nested } => {
                 let alpha = |t: &crate::texture::Texture| {
-                    let a = t.eval(uv).luminance().max(0.0);
+                    let a = t.eval_at(uv).luminance().max(0.0);
                     if *remap { a.sqrt() } else { a }
                 };
                 self.push(Model::from_leaf(nested, uv, hero, Some((alpha(alpha_u), alpha(alpha_v)))), scale, side);

@@ -64,6 +64,7 @@
 #[cfg(doc)]
 use math::COSINE_EPSILON;
 
+mod attributes;
 mod bsdf;
 mod bump_map;
 mod coating;

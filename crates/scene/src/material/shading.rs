@@ -2,6 +2,7 @@
 //! every model oriented by a shading normal.
 
 use math::{COSINE_EPSILON, Vec2, Vec3};
+use spectrum::Rgb;
 
 /// The local geometry at a surface point that a BSDF needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -14,12 +15,16 @@ pub struct ShadingPoint {
     pub shading_normal: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// The value of the mesh attribute the material reads ([`crate::Texture::MeshAttribute`])
+    /// at the point; black when the material reads none.
+    pub attribute: Rgb,
 }
 
 impl ShadingPoint {
-    /// A point whose shading normal is its geometric normal, at uv (0, 0).
+    /// A point whose shading normal is its geometric normal, at uv (0, 0), without a mesh
+    /// attribute.
     pub fn flat(normal: Vec3) -> Self {
-        Self { geometric_normal: normal, shading_normal: normal, uv: Vec2::ZERO }
+        Self { geometric_normal: normal, shading_normal: normal, uv: Vec2::ZERO, attribute: Rgb::BLACK }
     }
 }
 
