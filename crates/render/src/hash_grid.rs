@@ -402,9 +402,9 @@ impl HashGrid {
     }
 
     /// Calls `visit(slot)` for every stored point within `radius` (clamped to the build radius)
-    /// of `query` whose index lies in `indices` (all when `None`), reading the position of slot
-    /// `s` as `position(s)`: the query of a [`HashGrid::build_lean`] grid (it works after
-    /// [`HashGrid::build`] too).
+    /// of `query` whose index lies in `indices` (all when `None`). The positions come from the
+    /// grid's own sorted copy after [`HashGrid::build`]; a [`HashGrid::build_lean`] grid keeps
+    /// none and reads the position of slot `s` as `position(s)` (the caller's data in slot order).
     pub fn for_each_slot_near(
         &self,
         query: Vec3,
@@ -414,14 +414,19 @@ impl HashGrid {
         mut visit: impl FnMut(usize),
     ) {
         let radius_sq = (radius * radius).min(self.radius_sq);
+        let kept = self.keeps_positions();
         self.for_each_bucket(query, |start, end| {
             let (first, last) = match &indices {
                 None => (start, end),
                 Some(range) => self.index_range(start, end, range),
             };
-            for slot in first..last {
-                if (position(slot) - query).length_squared() <= radius_sq {
-                    visit(slot);
+            if kept {
+                self.visit_slice(first, last, query, radius_sq, &mut visit);
+            } else {
+                for slot in first..last {
+                    if (position(slot) - query).length_squared() <= radius_sq {
+                        visit(slot);
+                    }
                 }
             }
         });

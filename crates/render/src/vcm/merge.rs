@@ -157,6 +157,8 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
         Some(scattered * weight)
     };
     let t = camera.path_length + 1;
+    // Positions of the slots, for a grid that keeps none (the memory-efficient mode).
+    let at = |slot: usize| vertices[slot].as_ref().position;
     match source.scope {
         MergeScope::All | MergeScope::Group(_) => {
             let mut sum = S::default();
@@ -173,14 +175,14 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
                 MergeScope::Group(g) => Some(g.first..g.end),
                 _ => None,
             };
-            for_each_near(grid, vertices, position, radius, range, visit);
+            grid.for_each_slot_near(position, radius, range, at, visit);
             (camera.throughput * view(&camera.slots, sum) * normalization).to_rgb(wavelengths)
         }
         MergeScope::AcrossGroups(groups, sets) => {
             // No fluorescence here (the engine groups such scenes): the slots are the identity.
             let mut sums = [S::default(); super::wavelengths::MAX_CROSS_GROUPS];
             let indices = grid.sorted_indices();
-            for_each_near(grid, vertices, position, radius, None, |slot| {
+            grid.for_each_slot_near(position, radius, None, at, |slot| {
                 let index = indices[slot];
                 let h = groups.iter().position(|g| index < g.end).unwrap_or(groups.len() - 1);
                 let light = vertices[slot].as_ref();
@@ -197,27 +199,5 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
             }
             total
         }
-    }
-}
-
-/// Calls `visit(slot)` for the stored light vertices within `radius` of `position` (only those
-/// of grid indices `range`, when given), reading their positions from the grid, or from the
-/// records themselves when the grid keeps none (the memory-efficient mode's
-/// [`HashGrid::build_lean`]; the records are in slot order).
-fn for_each_near<S: SpectralMode, V: AsRef<MergeRecord<S>>>(
-    grid: &HashGrid,
-    vertices: &[V],
-    position: Vec3,
-    radius: f32,
-    range: Option<std::ops::Range<u32>>,
-    visit: impl FnMut(usize),
-) {
-    if grid.keeps_positions() {
-        match range {
-            None => grid.for_each_slot_within(position, radius, visit),
-            Some(range) => grid.for_each_slot_within_indices(position, radius, range, visit),
-        }
-    } else {
-        grid.for_each_slot_near(position, radius, range, |slot| vertices[slot].as_ref().position, visit);
     }
 }

@@ -781,14 +781,17 @@ fn build_grid<V: AsRef<MergeRecord<S>> + Sync, S: SpectralMode>(
     lean: bool,
 ) -> Option<Vec<u32>> {
     merge_groups.clear();
-    let mut positions: Vec<math::Vec3> = Vec::new();
-    let Some((layout, merge_paths)) = groups else {
+    // Builds the grid over the `n` points `position(0..n)`.
+    let mut build = |n: usize, position: &(dyn Fn(usize) -> math::Vec3 + Sync)| {
         if lean {
-            grid.build_lean(items.len(), |i| items[i].as_ref().position, radius);
+            grid.build_lean(n, position, radius);
         } else {
-            items.par_iter().map(|v| v.as_ref().position).collect_into_vec(&mut positions);
+            let positions: Vec<math::Vec3> = (0..n).into_par_iter().map(position).collect();
             grid.build(&positions, radius);
         }
+    };
+    let Some((layout, merge_paths)) = groups else {
+        build(items.len(), &|i| items[i].as_ref().position);
         return None;
     };
     let (order, starts) = layout.order_by_group(path_ends);
@@ -797,12 +800,7 @@ fn build_grid<V: AsRef<MergeRecord<S>> + Sync, S: SpectralMode>(
         end: starts[g + 1],
         normalization_scale: if size > 0 { merge_paths / size as f32 } else { 0.0 },
     }));
-    if lean {
-        grid.build_lean(order.len(), |j| items[order[j] as usize].as_ref().position, radius);
-    } else {
-        order.par_iter().map(|&i| items[i as usize].as_ref().position).collect_into_vec(&mut positions);
-        grid.build(&positions, radius);
-    }
+    build(order.len(), &|j| items[order[j] as usize].as_ref().position);
     // Grid indices count in group order; the items are in path order.
     Some(grid.sorted_indices().iter().map(|&j| order[j as usize]).collect())
 }

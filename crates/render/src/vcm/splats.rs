@@ -53,20 +53,11 @@ impl SplatSums {
             self.sums.resize(self.pixels, Rgb::BLACK);
         }
         for splat in &splats {
-            let value = if splat.value.is_finite() {
-                splat.value
-            } else {
+            if !splat.value.is_finite() {
                 self.rejected += 1;
-                Rgb::BLACK
-            };
-            match splat.target {
-                SplatTarget::Pixel(pixel) => self.sums[pixel as usize] += value,
-                SplatTarget::Filtered(raster) => {
-                    for (pixel, filter) in camera.filter_pixels(raster) {
-                        self.sums[pixel as usize] += value * filter;
-                    }
-                }
             }
+            let sums = &mut self.sums;
+            spread(camera, splat, |pixel, value| sums[pixel as usize] += value);
         }
         if self.keep {
             self.kept.push(splats);
@@ -97,17 +88,24 @@ impl SplatSums {
             }
         };
         for splat in self.kept.iter().flatten() {
-            let value = if splat.value.is_finite() { splat.value } else { Rgb::BLACK };
-            match splat.target {
-                SplatTarget::Pixel(pixel) => file(pixel, splat.s, value),
-                SplatTarget::Filtered(raster) => {
-                    for (pixel, filter) in camera.filter_pixels(raster) {
-                        file(pixel, splat.s, value * filter);
-                    }
-                }
-            }
+            spread(camera, splat, |pixel, value| file(pixel, splat.s, value));
         }
         self.kept.clear();
         self.count
+    }
+}
+
+/// Calls `add(pixel, value)` for every pixel `splat` reaches: a pixel splat its pixel, a
+/// filtered splat every pixel within the camera filter's radius, weighted by the filter. A
+/// non-finite splat adds black.
+fn spread(camera: &Camera, splat: &Splat, mut add: impl FnMut(u32, Rgb)) {
+    let value = if splat.value.is_finite() { splat.value } else { Rgb::BLACK };
+    match splat.target {
+        SplatTarget::Pixel(pixel) => add(pixel, value),
+        SplatTarget::Filtered(raster) => {
+            for (pixel, filter) in camera.filter_pixels(raster) {
+                add(pixel, value * filter);
+            }
+        }
     }
 }
