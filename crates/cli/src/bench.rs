@@ -131,6 +131,8 @@ fn child(args: &BenchArgs, source: &session::SceneSource, name: AlgorithmName) -
         max_length: file_max_length.unwrap_or(RenderSettings::default().max_length),
         memory_efficient: args.memory_efficient,
         spectral: args.spectral,
+        // As `vcm render` without --variance or a checkpoint.
+        variance: false,
         ..RenderSettings::default()
     };
     // The guard's estimate, made where the session makes it: after loading, before rendering.
@@ -138,7 +140,7 @@ fn child(args: &BenchArgs, source: &session::SceneSource, name: AlgorithmName) -
         Some(vcm) => session::guard::estimate_bytes(&scene, &vcm, 0),
         None => {
             render::vcm::memory::resident_bytes().unwrap_or(0)
-                + render::vcm::memory::driver_bytes(scene.camera.pixel_count())
+                + render::vcm::memory::driver_bytes(scene.camera.pixel_count(), false)
         }
     };
     render::render(&scene, &settings(Budget::Iterations(1))).map_err(anyhow::Error::msg)?;

@@ -292,6 +292,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         output: Some(args.output),
         exposure: args.exposure,
         variance: args.variance,
+        keep_variance: false,
         techniques: args.techniques,
         technique_length: args.technique_length,
         checkpoint: args.checkpoint,

@@ -42,7 +42,7 @@ fn main() {
             let film = render::render(&scene, &settings).unwrap().film;
             let cpu = (cpu_seconds() - before) / iterations as f64;
             let (mut variance, mut square) = (0.0f64, 0.0f64);
-            for (v, m) in film.variance_of_mean().iter().zip(film.mean()) {
+            for (v, m) in film.variance_of_mean().expect("kept by default").iter().zip(film.mean()) {
                 for c in 0..3 {
                     variance += f64::from(v[c]) * iterations as f64;
                     square += f64::from(m[c]) * f64::from(m[c]);

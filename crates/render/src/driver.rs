@@ -97,6 +97,10 @@ pub struct RenderSettings {
     /// Spectral mode with merging: wavelength groups per iteration
     /// ([`crate::vcm::VcmSettings::wavelength_groups`]).
     pub wavelength_groups: u32,
+    /// The film keeps the per-pixel sums of squares of the iterations (24 bytes per pixel) for
+    /// [`Film::variance_of_mean`] and checkpoints; without them the render's peak memory is
+    /// lower. Default: on.
+    pub variance: bool,
 }
 
 impl Default for RenderSettings {
@@ -116,6 +120,7 @@ impl Default for RenderSettings {
             russian_roulette: crate::path_tracer::RussianRoulette::default(),
             heuristic: crate::path_tracer::Heuristic::Balance,
             wavelength_groups: crate::vcm::wavelengths::DEFAULT_WAVELENGTH_GROUPS,
+            variance: true,
         }
     }
 }
@@ -133,6 +138,7 @@ impl RenderSettings {
                 memory_efficient: self.memory_efficient,
                 spectral: self.spectral,
                 wavelength_groups: self.wavelength_groups,
+                film_variance: self.variance,
             }),
             _ => None,
         }
@@ -323,13 +329,13 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
             ));
         }
         Some(film) => film,
-        None => Film::new(camera.width, camera.height),
+        None => Film::with_variance(camera.width, camera.height, settings.variance),
     };
     let mut renderer = Renderer::starting_at(scene, settings, film.iterations())?;
     let mut family_films = match renderer.vcm_engine_mut() {
         Some(engine) if record_families && film.iterations() == 0 => {
             engine.record_families(true);
-            Some(Family::ALL.map(|_| Film::new(camera.width, camera.height)))
+            Some(Family::ALL.map(|_| Film::without_variance(camera.width, camera.height)))
         }
         _ => None,
     };

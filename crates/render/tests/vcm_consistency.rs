@@ -305,10 +305,20 @@ fn algorithms_agree_with_bpt_on_the_fluorescent_scene_spectral() {
 /// streams, z = −4.1 and −3.6 at the same place), while vcm there agrees with bpt. The block is
 /// dim in red and heavy-tailed: bpm with another seed (`vcm render --scene-mask 513 --spectral
 /// -a bpm -r 64x64 -i 1500 --radius-factor 0.01 --seed 6 --variance …` against bpt at 32²,
-/// 6000 iterations) is 33 % low there but at z = −1.3 with the per-pixel variances, so the
-/// spread of the iterations may underestimate its error; a bias (finite radius next to the
-/// sphere, or grouped merging with paired wavelengths) is not ruled out. Kept out of CI's slow
-/// tier by its name (`.ci/run` skips `known_deviation_`) and listed as open in issue #11's notes.
+/// 6000 iterations) is 33 % low there but at z = −1.3 with the per-pixel variances.
+///
+/// **Explained as heavy tails, not a bias** (measured the same way with seeds 1–3, radius
+/// factor 0.01, red mean of block (3, 5) over bpt's): ppm 1.06 (z 0.1), 0.23 (z −3.9), 1.81
+/// (z +1.3); bpm 0.89 (z −0.4), 0.37 (z −5.1) at seed 2. The block's estimate swings by a
+/// factor of 8 between seeds while each run's standard error (from the spread of its
+/// iterations) claims a few %: its red light comes from rare fluorescent photon paths, the mean
+/// of 1500 iterations is far from normal, and a run that misses the rare paths is low with a
+/// spurious |z| of 4–5. ppm and bpm with the same seed trace the same light sub-paths, so both
+/// are low together at seed 2, the seed this test uses (and both were low on the earlier
+/// branch for the same reason). The mean ratio over the five runs is 0.87 ± 0.29; the pooled
+/// image means of all five are within 0.4 % of bpt's in every channel. A Z-test cannot judge
+/// such a block; the test stays out of CI's slow tier by its name (`.ci/run` skips
+/// `known_deviation_`) as the record of this measurement.
 #[test]
 #[ignore = "known deviation, see the doc comment: run with --ignored known_deviation_"]
 fn known_deviation_photon_mapping_on_the_fluorescent_scene_spectral() {

@@ -62,6 +62,7 @@ fn child(spec: &str) {
         match flag {
             "memory-efficient" => settings.memory_efficient = true,
             "spectral" => settings.spectral = true,
+            "no-variance" => settings.variance = false,
             other => panic!("unknown flag {other}"),
         }
     }
@@ -72,7 +73,7 @@ fn child(spec: &str) {
             let e = memory::estimate(&scene, &vcm, settings.seed);
             if settings.memory_efficient { e.memory_efficient_bytes } else { e.two_stage_bytes }
         }
-        None => memory::driver_bytes(scene.camera.pixel_count()),
+        None => memory::driver_bytes(scene.camera.pixel_count(), settings.variance),
     };
     let output = render::render(&scene, &settings).unwrap();
     assert_eq!(output.film.iterations(), 2);
@@ -84,8 +85,20 @@ fn memory_estimate_is_within_15_percent_of_the_measured_peak() {
     if let Ok(spec) = std::env::var(CHILD) {
         return child(&spec);
     }
-    let specs =
-        ["pt", "lt", "ppm", "bpm", "bpt", "vcm", "vcm,memory-efficient", "bpt,memory-efficient", "vcm,spectral"];
+    let specs = [
+        "pt",
+        "pt,no-variance",
+        "lt",
+        "ppm",
+        "bpm",
+        "bpt",
+        "vcm",
+        "vcm,no-variance",
+        "vcm,memory-efficient",
+        "vcm,memory-efficient,no-variance",
+        "bpt,memory-efficient",
+        "vcm,spectral",
+    ];
     let mut failures = Vec::new();
     for spec in specs {
         let out = Command::new(std::env::current_exe().unwrap())
@@ -102,7 +115,7 @@ fn memory_estimate_is_within_15_percent_of_the_measured_peak() {
         let error = predicted / peak - 1.0;
         let mib = |b: f64| b / f64::from(1 << 20);
         eprintln!(
-            "{spec:<22} before {:6.1} MiB, estimate {:6.1} MiB, predicted {:6.1} MiB, peak {:6.1} MiB: {:+.1} %",
+            "{spec:<32} before {:6.1} MiB, estimate {:6.1} MiB, predicted {:6.1} MiB, peak {:6.1} MiB: {:+.1} %",
             mib(before),
             mib(estimate),
             mib(predicted),

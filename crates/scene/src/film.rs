@@ -28,23 +28,41 @@ pub struct Film {
     width: u32,
     height: u32,
     sum: Vec<[f64; 3]>,
-    /// Sums of the squares of the iterations' pixel values, for the variance of the mean.
+    /// Sums of the squares of the iterations' pixel values, for the variance of the mean;
+    /// empty when the film keeps no variance ([`Film::without_variance`]).
     sum_squares: Vec<[f64; 3]>,
     iterations: u64,
     rejected_samples: u64,
 }
 
 impl Film {
-    /// An empty film.
+    /// An empty film that keeps the sums of squares for [`Film::variance_of_mean`] (48 bytes
+    /// per pixel).
     pub fn new(width: u32, height: u32) -> Self {
+        Self::with_variance(width, height, true)
+    }
+
+    /// An empty film without the sums of squares (24 bytes per pixel): it has no variance.
+    pub fn without_variance(width: u32, height: u32) -> Self {
+        Self::with_variance(width, height, false)
+    }
+
+    /// An empty film, with the sums of squares when `variance` is set.
+    pub fn with_variance(width: u32, height: u32, variance: bool) -> Self {
+        let pixels = width as usize * height as usize;
         Self {
             width,
             height,
-            sum: vec![[0.0; 3]; width as usize * height as usize],
-            sum_squares: vec![[0.0; 3]; width as usize * height as usize],
+            sum: vec![[0.0; 3]; pixels],
+            sum_squares: if variance { vec![[0.0; 3]; pixels] } else { Vec::new() },
             iterations: 0,
             rejected_samples: 0,
         }
+    }
+
+    /// Whether the film keeps the sums of squares, i.e. has [`Film::variance_of_mean`].
+    pub fn has_variance(&self) -> bool {
+        self.sum_squares.len() == self.sum.len()
     }
 
     /// Width in pixels.
@@ -70,11 +88,19 @@ impl Film {
     /// Adds one iteration's frame and the number of samples the iteration rejected.
     pub fn add_iteration(&mut self, frame: &FrameBuffer, rejected_samples: u64) {
         assert_eq!((frame.width, frame.height), (self.width, self.height), "frame size must match the film");
-        for ((sum, squares), pixel) in self.sum.iter_mut().zip(&mut self.sum_squares).zip(&frame.pixels) {
-            for (c, value) in pixel.to_array().into_iter().enumerate() {
-                let value = value as f64;
-                sum[c] += value;
-                squares[c] += value * value;
+        if self.has_variance() {
+            for ((sum, squares), pixel) in self.sum.iter_mut().zip(&mut self.sum_squares).zip(&frame.pixels) {
+                for (c, value) in pixel.to_array().into_iter().enumerate() {
+                    let value = value as f64;
+                    sum[c] += value;
+                    squares[c] += value * value;
+                }
+            }
+        } else {
+            for (sum, pixel) in self.sum.iter_mut().zip(&frame.pixels) {
+                for (c, value) in pixel.to_array().into_iter().enumerate() {
+                    sum[c] += value as f64;
+                }
             }
         }
         self.iterations += 1;
@@ -86,7 +112,8 @@ impl Film {
         &self.sum
     }
 
-    /// The per-pixel sums of the squares of the iterations' values, for checkpoints.
+    /// The per-pixel sums of the squares of the iterations' values, for checkpoints (empty
+    /// when the film keeps no variance).
     pub fn sum_squares(&self) -> &[[f64; 3]] {
         &self.sum_squares
     }
@@ -114,17 +141,22 @@ impl Film {
 
     /// Per pixel and channel, the estimated variance of the mean over iterations (the squared
     /// standard error), `(Σx² − (Σx)²/n) / (n(n−1))`, from the spread of the iterations; zero
-    /// with fewer than two iterations.
-    pub fn variance_of_mean(&self) -> Vec<[f32; 3]> {
+    /// with fewer than two iterations; `None` when the film keeps no variance.
+    pub fn variance_of_mean(&self) -> Option<Vec<[f32; 3]>> {
         let n = self.iterations as f64;
-        if self.iterations < 2 {
-            return vec![[0.0; 3]; self.sum.len()];
+        if !self.has_variance() {
+            return None;
         }
-        self.sum
+        if self.iterations < 2 {
+            return Some(vec![[0.0; 3]; self.sum.len()]);
+        }
+        let variance = self
+            .sum
             .iter()
             .zip(&self.sum_squares)
             .map(|(s, q)| std::array::from_fn(|c| ((q[c] - s[c] * s[c] / n).max(0.0) / (n * (n - 1.0))) as f32))
-            .collect()
+            .collect();
+        Some(variance)
     }
 
     /// The mean over iterations: the rendered image (row-major, top row first).
@@ -147,10 +179,16 @@ mod tests {
             film.add_iteration(&frame, 0);
         }
         // Sample variance of {1, 3, 2, 6} is 14/3; of the mean, 14/12.
-        let variance = film.variance_of_mean()[0];
+        let variance = film.variance_of_mean().unwrap()[0];
         assert!((variance[0] - 14.0 / 12.0).abs() < 1e-6, "{variance:?}");
         assert!((variance[1] - 4.0 * 14.0 / 12.0).abs() < 1e-5);
         assert_eq!(variance[2], 0.0, "a constant has no variance");
         assert_eq!(film.mean()[0][0], 3.0);
+        // Without the sums of squares the mean is the same and there is no variance.
+        let mut lean = Film::without_variance(1, 1);
+        for v in values {
+            lean.add_iteration(&FrameBuffer { width: 1, height: 1, pixels: vec![Rgb::new(v, 2.0 * v, 5.0)] }, 0);
+        }
+        assert_eq!((lean.mean(), lean.variance_of_mean(), lean.sum_squares().len()), (film.mean(), None, 0));
     }
 }

@@ -65,6 +65,9 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// Writes `film` and `recorded` to `path` atomically (write, then rename).
 pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
+    if !film.has_variance() {
+        bail!("internal error: a checkpoint needs a film that keeps its sums of squares");
+    }
     let temporary = PathBuf::from(format!("{}.tmp", path.display()));
     let write = || -> std::io::Result<()> {
         let mut out = std::io::BufWriter::new(std::fs::File::create(&temporary)?);

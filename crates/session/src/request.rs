@@ -53,6 +53,10 @@ pub struct Request {
     pub exposure: f32,
     /// Per-pixel variance of the mean, to this linear image file.
     pub variance: Option<PathBuf>,
+    /// Keep the film's sums of squares (24 bytes per pixel) even without a variance file or a
+    /// checkpoint, for a front end that reads [`scene::Film::variance_of_mean`] from the
+    /// outcome. The session keeps them anyway when `variance` or `checkpoint` is set.
+    pub keep_variance: bool,
     /// Per-technique images into this directory (VCM engine algorithms only), with per-(s, t)
     /// images up to `technique_length` segments.
     pub techniques: Option<PathBuf>,
@@ -97,6 +101,7 @@ impl Request {
             output: None,
             exposure: 0.0,
             variance: None,
+            keep_variance: false,
             techniques: None,
             technique_length: 4,
             checkpoint: None,

@@ -127,6 +127,9 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
         spectral: r.spectral,
         russian_roulette: r.russian_roulette,
         heuristic: r.heuristic,
+        // Checkpoints always carry the sums of squares, so that any resume can ask for a
+        // variance image.
+        variance: r.keep_variance || r.variance.is_some() || r.checkpoint.is_some(),
         ..RenderSettings::default()
     };
     if let Some(vcm_settings) = settings.vcm_settings()
@@ -189,8 +192,10 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
         write_st_images(dir, images, width, height, &options)?;
     }
     if let Some(path) = &r.variance {
-        let variance = io::Image { width, height, pixels: film.variance_of_mean() };
-        io::write_image(path, &variance, &options)?;
+        let Some(pixels) = film.variance_of_mean() else {
+            bail!("internal error: the film kept no sums of squares for the variance image {}", path.display())
+        };
+        io::write_image(path, &io::Image { width, height, pixels }, &options)?;
     }
     let mut written: Vec<String> = outputs.iter().map(|(p, _)| p.display().to_string()).collect();
     if let Some(path) = &r.variance {

@@ -44,11 +44,12 @@ fn a_session_renders_in_memory_and_reports_through_the_observer() {
 
     // The memory guard's switch is a note, not a print.
     let mut observer = Collect::default();
-    // BPT at 512x512 needs about 75 MiB more than the process holds in the default mode and
-    // about 40 MiB in the memory-efficient mode, which stores no light vertex.
+    // BPT at 512x512 needs about 69 MiB more than the process holds in the default mode and
+    // about 34 MiB in the memory-efficient mode, which stores no light vertex (neither keeps the
+    // film's sums of squares: no variance file, no checkpoint).
     let resident = render::vcm::memory::resident_bytes().unwrap();
     let tight = Request {
-        max_memory: Some(resident + (57 << 20)),
+        max_memory: Some(resident + (50 << 20)),
         resolution: Some((512, 512)),
         budget: Some(Budget::Iterations(1)),
         threads: 2,
@@ -81,12 +82,19 @@ fn a_resumed_session_continues_the_film_exactly() {
     let outcome = session::render(&resumed, None, &mut Collect::default()).unwrap();
     assert_eq!((outcome.summary.algorithm, outcome.summary.resumed_after), ("bpm", Some(2)));
     let straight = session::render(
-        &Request { budget: Some(Budget::Iterations(5)), ..request("bpm") },
+        &Request { budget: Some(Budget::Iterations(5)), keep_variance: true, ..request("bpm") },
         None,
         &mut Collect::default(),
     )
     .unwrap();
     assert_eq!(outcome.output.film.sums(), straight.output.film.sums(), "resumed film differs");
+    // Checkpoints carry the sums of squares even though no variance file was asked for, so the
+    // resumed film has the variance of the uninterrupted one.
+    assert_eq!(outcome.output.film.sum_squares(), straight.output.film.sum_squares());
+    assert!(straight.output.film.has_variance());
+    // Without a variance file, a checkpoint or `keep_variance` the film keeps no squares.
+    let lean = session::render(&request("bpm"), None, &mut Collect::default()).unwrap();
+    assert!(!lean.output.film.has_variance() && lean.output.film.variance_of_mean().is_none());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -193,6 +193,7 @@ fn render_and_judge(
     request.seed = args.seed;
     request.threads = args.threads;
     request.permissive = args.permissive;
+    request.keep_variance = true;
     let rendered = catch(|| session::render(&request, None, &mut Quiet));
     let film = match rendered {
         Ok(outcome) => outcome.output.film,
@@ -200,7 +201,10 @@ fn render_and_judge(
     };
     let (width, height) = (film.width() as usize, film.height() as usize);
     let image = io::Image { width, height, pixels: film.mean() };
-    let variance = io::Image { width, height, pixels: film.variance_of_mean() };
+    let Some(pixels) = film.variance_of_mean() else {
+        return Outcome::Failed("the film kept no variance".to_string());
+    };
+    let variance = io::Image { width, height, pixels };
     match verdict::judge(&image, &variance, reference, reference_variance, criteria) {
         Ok(verdict) => Outcome::Judged { iterations: film.iterations(), verdict },
         Err(error) => Outcome::Failed(first_line(&format!("{error:#}"))),

@@ -202,8 +202,8 @@ pub fn connect_vertices<S: SpectralMode>(
     let pdfs = ConnectionPdfs {
         camera_forward_a: camera_eval.pdf.forward.0 * camera_continuation * light_eval.cos_generated * inv_d2,
         camera_reverse_w: camera_eval.pdf.reverse.0 * camera_continuation,
-        light_forward_a: light_eval.pdf.forward.0 * light.record.continuation * camera_eval.cos_generated * inv_d2,
-        light_reverse_w: light_eval.pdf.reverse.0 * light.record.continuation,
+        light_forward_a: light_eval.pdf.forward.0 * light.record.continuation() * camera_eval.cos_generated * inv_d2,
+        light_reverse_w: light_eval.pdf.reverse.0 * light.record.continuation(),
     };
     let light_mis = light.record.mis(k);
     let weight = mis::connection_weight(&light_mis, &camera.mis, &pdfs, k);

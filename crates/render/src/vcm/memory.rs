@@ -24,10 +24,13 @@ use super::{Iteration, LIGHT_STREAM, Techniques, VcmSettings};
 /// Light sub-paths traced by the pilot.
 pub const PILOT_PATHS: usize = 4096;
 
-/// Bytes per pixel the driver holds whatever the algorithm: the film's sums and sums of squares
-/// (2 × 3 × f64) and the iteration's frame (3 × f32). (Recording technique families adds five
-/// films and a frame.)
-pub const FILM_BYTES_PER_PIXEL: usize = 60;
+/// Bytes per pixel the driver holds whatever the algorithm: the film's sums (3 × f64) and the
+/// iteration's frame (3 × f32). (Recording technique families adds five films and a frame.)
+pub const FILM_BYTES_PER_PIXEL: usize = 36;
+
+/// Bytes per pixel of the film's sums of squares (3 × f64), kept for variance images and
+/// checkpoints ([`crate::RenderSettings::variance`]).
+pub const SQUARES_BYTES_PER_PIXEL: usize = 24;
 
 /// Bytes per pixel of the engine: the light sub-paths' end indices (u32).
 const ENGINE_BYTES_PER_PIXEL: usize = 4;
@@ -115,9 +118,15 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
 }
 
 /// Bytes the driver holds for a render of `pixel_count` pixels whatever the algorithm (the
-/// whole estimate of the path tracer and the eye light).
-pub fn driver_bytes(pixel_count: usize) -> u64 {
-    (pixel_count * FILM_BYTES_PER_PIXEL) as u64
+/// whole estimate of the path tracer and the eye light), with the film's sums of squares when
+/// `variance` is set.
+pub fn driver_bytes(pixel_count: usize, variance: bool) -> u64 {
+    (pixel_count * film_bytes_per_pixel(variance)) as u64
+}
+
+/// Bytes per pixel of the film and the frame.
+fn film_bytes_per_pixel(variance: bool) -> usize {
+    FILM_BYTES_PER_PIXEL + if variance { SQUARES_BYTES_PER_PIXEL } else { 0 }
 }
 
 /// An upper bound of [`MemoryEstimate::two_stage_bytes`] without a pilot: every light sub-path
@@ -145,7 +154,7 @@ fn peak_bytes(counts: &Counts, settings: &VcmSettings, memory_efficient: bool) -
     } else {
         (std::mem::size_of::<LightVertex<Rgb>>(), std::mem::size_of::<MergeRecord<Rgb>>())
     };
-    let mut per_pixel = (FILM_BYTES_PER_PIXEL + ENGINE_BYTES_PER_PIXEL) as f64;
+    let mut per_pixel = (film_bytes_per_pixel(settings.film_variance) + ENGINE_BYTES_PER_PIXEL) as f64;
     if settings.radius_mode == super::RadiusMode::PerPixel {
         per_pixel += PER_PIXEL_RADIUS_BYTES as f64;
     }

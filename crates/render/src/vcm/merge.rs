@@ -145,7 +145,7 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
                 // The reverse density belongs to the camera BSDF, but the light sub-path's
                 // Russian roulette would have governed it.
                 let forward = eval.pdf.forward.0 * continuation;
-                let reverse = eval.pdf.reverse.0 * light.continuation;
+                let reverse = eval.pdf.reverse.0 * light.continuation();
                 mis::merge_weight(&light_mis, &camera.mis, forward, reverse, k)
             }
         };

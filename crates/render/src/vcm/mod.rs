@@ -217,7 +217,7 @@ pub struct VcmSettings {
     pub radius_alpha: f32,
     /// Global or per-pixel radius.
     pub radius_mode: RadiusMode,
-    /// Memory-efficient mode (after §6.2): only 48-byte merging records of the light vertices are
+    /// Memory-efficient mode (after §6.2): only 44-byte merging records of the light vertices are
     /// kept; each pixel traces its light sub-path again right before its camera sub-path and
     /// connects to it. The image is the default mode's, bit for bit; the light walks cost twice.
     pub memory_efficient: bool,
@@ -226,6 +226,9 @@ pub struct VcmSettings {
     /// Spectral mode with merging (two-stage mode): the number K of wavelength groups per
     /// iteration ([`wavelengths`]); 1 is one set for the whole iteration. Ignored otherwise.
     pub wavelength_groups: u32,
+    /// The driver's film keeps the sums of squares ([`crate::RenderSettings::variance`]); only
+    /// the memory estimate ([`memory`]) reads it.
+    pub film_variance: bool,
 }
 
 impl VcmSettings {
@@ -241,6 +244,7 @@ impl VcmSettings {
             memory_efficient: false,
             spectral: false,
             wavelength_groups: DEFAULT_WAVELENGTH_GROUPS,
+            film_variance: true,
         }
     }
 }
@@ -298,7 +302,7 @@ pub struct IterationStats {
     /// Light vertices stored for merging or connection.
     pub light_vertices: usize,
     /// Bytes per stored light vertex: the record's size ([`light_vertex::LightVertex`], 64 in
-    /// RGB mode, 68 in spectral mode; [`light_vertex::MergeRecord`], 48 or 52, in the
+    /// RGB mode, 68 in spectral mode; [`light_vertex::MergeRecord`], 44 or 48, in the
     /// memory-efficient mode). With merging, the two-stage mode adds a 4-byte slot map.
     pub bytes_per_vertex: usize,
     /// Light-tracing splats.
@@ -594,7 +598,7 @@ impl<S: SpectralMode> Engine<S> {
     /// The memory-efficient iteration (§6.2, restructured): merging-only records of every light
     /// sub-path and the grid over them, then per pixel its light sub-path traced again (the same
     /// random stream, so the same vertices; camera connections on) right before its camera
-    /// sub-path, which connects to it and merges with the records. Nothing but the 48-byte
+    /// sub-path, which connects to it and merges with the records. Nothing but the 44-byte
     /// records is kept for a whole iteration, and merging uses the iteration's own light
     /// vertices, so the MIS weights and the wavelengths are those of the two-stage mode.
     fn run_single_stage(
