@@ -1087,6 +1087,22 @@ impl Builder {
                 )?;
                 two_sided(m)
             }
+            "diffusetransmission" => {
+                // pbrt-v4: reflectance and transmittance (default 0.25 each), both times `scale`.
+                let scale = p.float("scale", 1.0)?;
+                let scaled = |texture: Texture| match texture.as_constant() {
+                    Some(c) => Texture::Constant(c * scale),
+                    None if scale == 1.0 => texture,
+                    None => Texture::Scale {
+                        texture: Arc::new(texture),
+                        scale: Arc::new(Texture::Constant(Rgb::splat(scale))),
+                    },
+                };
+                Material::DiffuseTransmission {
+                    reflectance: scaled(self.spectrum_texture(p, "reflectance", Rgb::splat(0.25), true)?),
+                    transmittance: scaled(self.spectrum_texture(p, "transmittance", Rgb::splat(0.25), true)?),
+                }
+            }
             "dielectric" | "thindielectric" => {
                 let eta = self.ior(p)?;
                 let white = || Texture::Constant(Rgb::WHITE);
@@ -1139,12 +1155,7 @@ impl Builder {
                 Material::Blend { weight, first: lookup(&names[0])?, second: lookup(&names[1])? }
             }
             "interface" => return Err(err(file, d.pos, "material \"interface\" (media boundaries) is not supported")),
-            other @ ("coateddiffuse"
-            | "coatedconductor"
-            | "diffusetransmission"
-            | "hair"
-            | "measured"
-            | "subsurface") => {
+            other @ ("coateddiffuse" | "coatedconductor" | "hair" | "measured" | "subsurface") => {
                 return Err(err(file, d.pos, format!("material \"{other}\" is not supported")));
             }
             other => return Err(err(file, d.pos, format!("unknown material type \"{other}\""))),

@@ -14,6 +14,10 @@ impl Material {
             Material::Diffuse { reflectance } | Material::Fluorescent { reflectance, .. } => f(reflectance),
             Material::Conductor { specular_reflectance, .. }
             | Material::RoughConductor { specular_reflectance, .. } => f(specular_reflectance),
+            Material::DiffuseTransmission { reflectance, transmittance } => {
+                f(reflectance);
+                f(transmittance);
+            }
             Material::Dielectric { specular_reflectance, specular_transmittance, .. }
             | Material::ThinDielectric { specular_reflectance, specular_transmittance, .. }
             | Material::RoughDielectric { specular_reflectance, specular_transmittance, .. } => {

@@ -22,6 +22,14 @@ pub enum Material {
         /// Reflectance.
         reflectance: Texture,
     },
+    /// Lambertian reflection plus Lambertian transmission, two-sided (pbrt-v4's
+    /// `diffusetransmission`): `R/π` on the side of the incident direction, `T/π` across.
+    DiffuseTransmission {
+        /// Reflectance R.
+        reflectance: Texture,
+        /// Transmittance T.
+        transmittance: Texture,
+    },
     /// Smooth conductor (Fresnel-weighted mirror); `eta = 0, k = ∞`-like perfect mirrors use
     /// [`Material::perfect_mirror`].
     Conductor {

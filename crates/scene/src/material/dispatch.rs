@@ -12,6 +12,7 @@ use super::conductor::Conductor;
 use super::description::Material;
 use super::dielectric::Dielectric;
 use super::diffuse::Diffuse;
+use super::diffuse_transmission::DiffuseTransmission;
 use super::lobe::{ModelEval, Sampled};
 use super::plastic::Plastic;
 use super::rough_conductor::RoughConductor;
@@ -74,6 +75,7 @@ pub(super) trait LeafModel {
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Model {
     Diffuse(Diffuse),
+    DiffuseTransmission(DiffuseTransmission),
     Conductor(Conductor),
     RoughConductor(RoughConductor),
     Dielectric(Dielectric),
@@ -89,6 +91,7 @@ macro_rules! each_model {
     ($model:expr, $m:ident => $e:expr) => {
         match $model {
             Model::Diffuse($m) => $e,
+            Model::DiffuseTransmission($m) => $e,
             Model::Conductor($m) => $e,
             Model::RoughConductor($m) => $e,
             Model::Dielectric($m) => $e,
@@ -118,6 +121,12 @@ impl Model {
             | Material::BumpMap { .. }
             | Material::TexturedRoughness { .. } => return None,
             Material::Diffuse { reflectance } => Model::Diffuse(Diffuse { reflectance: reflectance.eval_at(uv) }),
+            Material::DiffuseTransmission { reflectance, transmittance } => {
+                Model::DiffuseTransmission(DiffuseTransmission {
+                    reflectance: reflectance.eval_at(uv),
+                    transmittance: transmittance.eval_at(uv),
+                })
+            }
             // Unit reflectance: the integrators apply the diagonal reflectance and the
             // re-emission themselves.
             Material::Fluorescent { .. } => Model::Diffuse(Diffuse { reflectance: Rgb::WHITE }),

@@ -45,7 +45,7 @@
 //! Each leaf model lives in its own file with its evaluated parameters, evaluation, sampling,
 //! forward and reverse solid-angle pdfs, lobe probabilities, albedo (the continuation
 //! probability is the largest channel of the blended albedo, taken in `mixture`):
-//! `diffuse`, `conductor`, `rough_conductor`, `dielectric`, `thin_dielectric`,
+//! `diffuse`, `diffuse_transmission`, `conductor`, `rough_conductor`, `dielectric`, `thin_dielectric`,
 //! `rough_dielectric`, `plastic`, `rough_plastic` (these two share `coating`), and
 //! SmallVCM's `reference` material, which keeps its own BSDF. Shared helpers have their own
 //! files: `fresnel`, `lobe` (sample/evaluation records), `shading` (shading point,
@@ -72,6 +72,7 @@ mod conductor;
 mod description;
 mod dielectric;
 mod diffuse;
+mod diffuse_transmission;
 mod dispatch;
 mod fresnel;
 mod lobe;
