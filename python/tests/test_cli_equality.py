@@ -35,3 +35,23 @@ def test_render_equals_cli(tmp_path, root, vcm_bin, scene, algorithm, cli_args, 
     other = vcm.render(vcm.load_file(scene_arg), algorithm=algorithm, iterations=3, resolution=(40, 30), seed=12,
                        **kwargs)
     assert not np.array_equal(other, expected)
+
+
+def test_checkpoints_are_shared_with_the_cli(tmp_path, vcm_bin):
+    """A checkpoint of `vcm render` resumes in Python, and a Python checkpoint in `vcm render`."""
+    common = ["--scene", "cornell-sun", "--algorithm", "vcm", "--resolution", "24x16", "--seed", "4", "--quiet"]
+    cli_checkpoint = tmp_path / "cli.ckpt"
+    subprocess.run([str(vcm_bin), "render", *common, "--iterations", "2", "--checkpoint", str(cli_checkpoint),
+                    "--output", str(tmp_path / "two.exr")], check=True, capture_output=True)
+    session = vcm.Session.resume(cli_checkpoint)
+    assert session.iterations == 2
+    session.step(2)
+    four = vcm.render(vcm.load_file("cornell-sun"), iterations=4, resolution=(24, 16), seed=4)
+    assert np.array_equal(session.image(), four)
+    python_checkpoint = tmp_path / "python.ckpt"
+    session.checkpoint(python_checkpoint)
+    subprocess.run([str(vcm_bin), "render", "--resume", str(python_checkpoint), "--iterations", "5", "--quiet",
+                    "--output", str(tmp_path / "five.exr")], check=True, capture_output=True)
+    five = vcm.render(vcm.load_file("cornell-sun"), iterations=5, resolution=(24, 16), seed=4)
+    assert np.array_equal(vcm.read(tmp_path / "five.exr"), five)
+    assert not np.array_equal(five, four)
