@@ -7,7 +7,6 @@ mod bench_accel;
 mod compare;
 mod conformance;
 mod report;
-mod ztest;
 
 use render::path_tracer::{Heuristic, RussianRoulette};
 use std::path::PathBuf;
@@ -22,6 +21,8 @@ use render::driver::Budget;
 use render::vcm::RadiusMode;
 use scene::cornell;
 use session::{LoadedScene, Notice, SceneSource};
+// The per-entry Z-test of `compare` and `conformance`.
+use image_metrics::ztest;
 
 #[derive(Parser)]
 #[command(name = "vcm", version, about = "A physically based renderer built around vertex connection and merging")]

@@ -7,18 +7,32 @@
 //! errors are values ([`anyhow::Error`], messages naming the setting as the command line spells
 //! it), nothing here prints or exits; messages for the user arrive through [`Observer`], and the
 //! progress bar is switched by [`Request::progress`].
+//!
+//! The steps of a session, shared by every front end: [`Prepared::new`] (request to loaded,
+//! checked scene and settings), [`Progressive`] (one iteration at a time into the film and the
+//! technique images), [`run_budget`] (stepping until the budget, checkpointing). [`render`] runs
+//! them to the end and writes the files; [`Live`] owns a prepared session and steps it when
+//! asked (the Python module's `Session`).
 
+mod budget;
 pub mod checkpoint;
 pub mod fingerprint;
 pub mod guard;
+mod live;
 pub mod outputs;
+mod prepare;
+mod progressive;
 mod request;
 mod run;
 pub mod source;
 mod summary;
 
+pub use budget::{Checkpointing, run_budget};
+pub use live::Live;
+pub use prepare::Prepared;
+pub use progressive::Progressive;
 pub use request::{Request, radius_mode_from_name, radius_mode_name};
-pub use run::{Observer, Outcome, render};
+pub use run::{DEFAULT_ITERATIONS, Observer, Outcome, render};
 pub use source::{LoadedScene, SceneSource, load_scene, scene_source};
 pub use summary::Summary;
 

@@ -1,0 +1,186 @@
+//! Everything a render session settles before its first iteration: the request with a
+//! resumed checkpoint's settings applied, the checked settings and outputs, the loaded scene,
+//! the memory guard's decision and what a checkpoint records. [`crate::render`] and
+//! [`crate::Live`] (the Python module's sessions) both start from it.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use render::driver::Budget;
+use render::vcm::technique_images::TechniqueLayout;
+use render::{Algorithm, RenderSettings};
+use scene::{Film, Scene};
+
+use crate::Notice;
+use crate::checkpoint::{self, Recorded};
+use crate::guard::{self, Guard};
+use crate::outputs::{check_writable, output_paths};
+use crate::request::{Request, radius_mode_from_name, radius_mode_name};
+use crate::run::{DEFAULT_ITERATIONS, Observer, validate};
+use crate::source::{LoadedScene, SceneSource, load_scene, scene_source};
+
+/// A render session ready for its first iteration.
+pub struct Prepared {
+    /// The request, with a resumed checkpoint's settings in place of the given ones.
+    pub request: Request,
+    /// The loaded scene.
+    pub scene: Scene,
+    /// The driver's settings (the memory guard may have switched on the memory-efficient mode).
+    pub settings: RenderSettings,
+    /// What checkpoints of this render record.
+    pub recorded: Recorded,
+    /// The film of the resumed checkpoint, taken by the first [`crate::Progressive`].
+    pub resumed: Option<Film>,
+    /// Iterations in the resumed checkpoint.
+    pub resumed_iterations: Option<u64>,
+    /// The image files to write, with their formats.
+    pub outputs: Vec<(PathBuf, io::ImageFormat)>,
+    /// Per-(s, t) technique images to record (`request.techniques`; the Python module sets it
+    /// without a directory).
+    pub layout: Option<TechniqueLayout>,
+    /// Per-family films to record.
+    pub record_families: bool,
+}
+
+impl Prepared {
+    /// Resolves, checks and loads what `request` asks for; notices go to `observer`.
+    pub fn new(request: &Request, observer: &mut dyn Observer) -> Result<Self> {
+        let mut request = request.clone();
+        // A resumed render takes its settings from the checkpoint.
+        let resumed = match &request.resume {
+            Some(path) => {
+                let (recorded, film) = checkpoint::load(path)?;
+                request.scene = match &recorded.scene_file {
+                    Some((file, defines)) => scene_source(&file.display().to_string(), defines)?,
+                    None => SceneSource::Builtin(recorded.mask),
+                };
+                request.algorithm = Algorithm::from_name(&recorded.algorithm).ok_or_else(|| {
+                    anyhow::anyhow!("unknown algorithm '{}' in '{}'", recorded.algorithm, path.display())
+                })?;
+                request.resolution = Some(recorded.resolution);
+                request.max_length = Some(recorded.max_length);
+                request.seed = recorded.seed;
+                request.radius_factor = recorded.radius_factor;
+                request.radius_alpha = recorded.radius_alpha;
+                request.radius_mode = radius_mode_from_name(&recorded.radius_mode).ok_or_else(|| {
+                    anyhow::anyhow!("unknown radius mode '{}' in '{}'", recorded.radius_mode, path.display())
+                })?;
+                request.memory_efficient = recorded.memory_efficient;
+                request.spectral = recorded.spectral;
+                request.russian_roulette = recorded.russian_roulette;
+                request.heuristic = recorded.heuristic;
+                if request.checkpoint.is_none() {
+                    request.checkpoint = Some(path.clone());
+                }
+                Some((film, recorded.fingerprint, path.clone()))
+            }
+            None => None,
+        };
+        let r = &request;
+        validate(r, resumed.is_some())?;
+        let outputs = match &r.output {
+            Some(path) => output_paths(path)?,
+            None => Vec::new(),
+        };
+        for (path, _) in &outputs {
+            check_writable(path)?;
+        }
+        if let Some(path) = &r.checkpoint {
+            check_writable(path)?;
+        }
+        if let Some(path) = &r.variance {
+            if io::ImageFormat::from_path(path)? == io::ImageFormat::Png {
+                bail!("--variance '{}': use a linear format (.exr, .pfm or .hdr), not PNG", path.display());
+            }
+            check_writable(path)?;
+        }
+        let layout = match &r.techniques {
+            Some(dir) => {
+                let layout =
+                    TechniqueLayout::new(r.technique_length).map_err(|e| anyhow::anyhow!("--technique-length: {e}"))?;
+                std::fs::create_dir_all(dir)
+                    .map_err(|e| anyhow::anyhow!("cannot create technique directory '{}': {e}", dir.display()))?;
+                Some(layout)
+            }
+            None => None,
+        };
+
+        let loaded = load_scene(&r.scene, r.resolution, r.permissive)?;
+        for warning in &loaded.warnings {
+            observer.notice(Notice::Warning(warning.clone()));
+        }
+        if let Some(line) = &loaded.loaded {
+            observer.notice(Notice::Progress(line.clone()));
+        }
+        let LoadedScene { scene, file_max_length, file_samples, fingerprint, .. } = loaded;
+        if let Some((_, recorded, path)) = &resumed
+            && let Some(difference) = fingerprint.difference(recorded)
+        {
+            bail!(
+                "cannot resume '{}': {difference}; resuming would mix renders of two different scenes (restore the \
+                 scene, or start a new render)",
+                path.display()
+            );
+        }
+        let mut settings = RenderSettings {
+            algorithm: r.algorithm,
+            budget: r.budget.unwrap_or(Budget::Iterations(file_samples.unwrap_or(DEFAULT_ITERATIONS))),
+            max_length: r.max_length.or(file_max_length).unwrap_or(10),
+            seed: r.seed,
+            threads: r.threads,
+            progress: r.progress,
+            radius_factor: r.radius_factor,
+            radius_alpha: r.radius_alpha,
+            radius_mode: r.radius_mode,
+            memory_efficient: r.memory_efficient,
+            spectral: r.spectral,
+            russian_roulette: r.russian_roulette,
+            heuristic: r.heuristic,
+            // Checkpoints always carry the sums of squares, so that any resume can ask for a
+            // variance image.
+            variance: r.keep_variance || r.variance.is_some() || r.checkpoint.is_some(),
+            ..RenderSettings::default()
+        };
+        if let Some(vcm_settings) = settings.vcm_settings()
+            && !settings.memory_efficient
+            && let Guard::SwitchToMemoryEfficient(message) = guard::check(&scene, &vcm_settings, r.seed, r.max_memory)?
+        {
+            observer.notice(Notice::Note(message));
+            settings.memory_efficient = true;
+        }
+        let recorded = Recorded {
+            mask: match r.scene {
+                SceneSource::Builtin(mask) => mask,
+                SceneSource::File(..) => 0,
+            },
+            scene_file: match &r.scene {
+                SceneSource::Builtin(_) => None,
+                SceneSource::File(path, defines) => Some((path.clone(), defines.clone())),
+            },
+            algorithm: r.algorithm.name().to_string(),
+            resolution: (scene.camera.width, scene.camera.height),
+            max_length: settings.max_length,
+            seed: r.seed,
+            radius_factor: r.radius_factor,
+            radius_alpha: r.radius_alpha,
+            radius_mode: radius_mode_name(r.radius_mode).to_string(),
+            memory_efficient: settings.memory_efficient,
+            spectral: r.spectral,
+            russian_roulette: r.russian_roulette,
+            heuristic: r.heuristic,
+            fingerprint,
+        };
+
+        Ok(Self {
+            resumed_iterations: resumed.as_ref().map(|(film, ..)| film.iterations()),
+            resumed: resumed.map(|(film, ..)| film),
+            record_families: request.techniques.is_some(),
+            request,
+            scene,
+            settings,
+            recorded,
+            outputs,
+            layout,
+        })
+    }
+}
