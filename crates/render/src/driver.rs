@@ -5,11 +5,9 @@
 //! `Rng::for_stream(seed, iteration, pixel)`, and each pixel's iterations are summed in order,
 //! so the image does not depend on the number of threads.
 
-use std::io::IsTerminal;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use math::Rng;
 use rayon::prelude::*;
 use scene::{Film, FrameBuffer, Scene};
@@ -17,8 +15,9 @@ use spectrum::Rgb;
 
 use crate::eye_light;
 use crate::path_tracer::PathTracer;
+use crate::progressive::{Progressive, run_budget};
 use crate::vcm::technique_images::{TechniqueImages, TechniqueLayout};
-use crate::vcm::{Family, RadiusMode, VcmAlgorithm, VcmEngine, VcmSettings};
+use crate::vcm::{RadiusMode, VcmAlgorithm, VcmEngine, VcmSettings};
 
 /// The rendering algorithms. The names are the command-line spellings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -160,14 +159,14 @@ pub struct RenderOutput {
     pub vcm_stats: Option<crate::vcm::IterationStats>,
     /// The render was stopped early through [`Control::stop`].
     pub interrupted: bool,
-    /// Per technique family ([`Family::ALL`] order), when [`Control::record_families`] was set
+    /// Per technique family ([`crate::vcm::Family::ALL`] order), when [`Control::record_families`] was set
     /// and the algorithm is one of the VCM engine's.
     pub family_films: Option<[Film; 5]>,
     /// Per (s, t) technique, when [`Control::record_techniques`] was set and the algorithm is
     /// one of the VCM engine's.
     pub technique_images: Option<TechniqueImages>,
     /// Discarded non-finite estimates of this render's iterations per technique family
-    /// ([`Family::ALL`] order; VCM engine only).
+    /// ([`crate::vcm::Family::ALL`] order; VCM engine only).
     pub rejected_by_family: Option<crate::vcm::RejectedCounts>,
 }
 
@@ -294,7 +293,7 @@ pub struct Control<'a> {
     /// Called with the film every `checkpoint_every` of wall-clock time (after the iteration
     /// that crosses the interval) and once at the end; a returned error stops the render.
     pub checkpoint: Option<(Duration, SaveFilm<'a>)>,
-    /// Accumulate one film per technique family of the VCM engine ([`Family`]), returned in
+    /// Accumulate one film per technique family of the VCM engine ([`crate::vcm::Family`]), returned in
     /// [`RenderOutput::family_films`]; they sum to the film. Ignored by the other integrators
     /// and when resuming (the families of earlier iterations are not in a checkpoint).
     pub record_families: bool,
@@ -316,128 +315,10 @@ pub fn render(scene: &Scene, settings: &RenderSettings) -> Result<RenderOutput, 
 /// `control` says. `Budget::Iterations(n)` counts the iterations of the resumed film too;
 /// `Budget::Time` counts this call's time only.
 pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -> Result<RenderOutput, String> {
-    let Control { resume, stop, mut checkpoint, record_families, record_techniques } = control;
-    let camera = &scene.camera;
-    let mut film = match resume {
-        Some(film) if (film.width(), film.height()) != (camera.width, camera.height) => {
-            return Err(format!(
-                "the film to resume is {}x{}, the render {}x{}",
-                film.width(),
-                film.height(),
-                camera.width,
-                camera.height
-            ));
-        }
-        Some(film) => film,
-        None => Film::with_variance(camera.width, camera.height, settings.variance),
-    };
-    let mut renderer = Renderer::starting_at(scene, settings, film.iterations())?;
-    let mut family_films = match renderer.vcm_engine_mut() {
-        Some(engine) if record_families && film.iterations() == 0 => {
-            engine.record_families(true);
-            Some(Family::ALL.map(|_| Film::without_variance(camera.width, camera.height)))
-        }
-        _ => None,
-    };
-    let mut technique_images = match (renderer.vcm_engine_mut(), record_techniques) {
-        (Some(engine), Some(layout)) if film.iterations() == 0 => {
-            engine.record_techniques(Some(layout));
-            Some(TechniqueImages::new(layout, camera.pixel_count()))
-        }
-        _ => None,
-    };
-    // Scratch for one family's iteration (allocated only when families are recorded).
-    let mut family_frame = FrameBuffer::new(0, 0);
-    let progress = make_progress_bar(settings);
-    let start = Instant::now();
-    let mut last_checkpoint = Instant::now();
-    let mut interrupted = false;
-    let mut rejected_by_family: Option<crate::vcm::RejectedCounts> = None;
-    let first_iteration = renderer.iterations();
-    loop {
-        let iteration = renderer.iterations();
-        match settings.budget {
-            Budget::Iterations(n) if iteration >= n => break,
-            Budget::Time(limit) if iteration > first_iteration && start.elapsed() >= limit => break,
-            _ => {}
-        }
-        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
-            interrupted = true;
-            break;
-        }
-        let rejected = renderer.step();
-        film.add_iteration(renderer.frame(), rejected);
-        if let Some(engine) = renderer.vcm_engine() {
-            let counts = rejected_by_family.get_or_insert_with(Default::default);
-            for (total, r) in counts.iter_mut().zip(engine.stats().rejected_by_family) {
-                *total += r;
-            }
-        }
-        if let (Some(films), Some(values)) = (&mut family_films, renderer.vcm_engine().and_then(|e| e.family_frames()))
-        {
-            if family_frame.pixels.is_empty() {
-                family_frame = FrameBuffer::new(camera.width, camera.height);
-            }
-            for (index, family_film) in films.iter_mut().enumerate() {
-                for (pixel, value) in family_frame.pixels.iter_mut().zip(values) {
-                    *pixel = value.0[index];
-                }
-                family_film.add_iteration(&family_frame, 0);
-            }
-        }
-        if let (Some(images), Some(values)) =
-            (&mut technique_images, renderer.vcm_engine().and_then(|e| e.technique_frame()))
-        {
-            images.add_iteration(values)?;
-        }
-        if let Some((every, save)) = &mut checkpoint
-            && last_checkpoint.elapsed() >= *every
-        {
-            save(&film)?;
-            last_checkpoint = Instant::now();
-        }
-        if let Some(bar) = &progress {
-            match settings.budget {
-                Budget::Iterations(_) => bar.set_position(iteration + 1),
-                Budget::Time(_) => {
-                    bar.set_position(start.elapsed().as_millis() as u64);
-                    bar.set_message(format!("{} it", iteration + 1));
-                }
-            }
-        }
-    }
-    if let Some(bar) = progress {
-        bar.finish_and_clear();
-    }
-    if let Some((_, save)) = &mut checkpoint {
-        save(&film)?;
-    }
-    let vcm_stats = renderer.vcm_engine().map(|e| e.stats());
-    let light_vertices = vcm_stats.map(|s| (s.light_vertices, s.bytes_per_vertex));
-    Ok(RenderOutput {
-        film,
-        elapsed: start.elapsed(),
-        threads: renderer.threads(),
-        light_vertices,
-        vcm_stats,
-        interrupted,
-        family_films,
-        technique_images,
-        rejected_by_family,
-    })
-}
-
-fn make_progress_bar(settings: &RenderSettings) -> Option<ProgressBar> {
-    if !settings.progress || !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let (length, template) = match settings.budget {
-        Budget::Iterations(n) => (n, "{bar:40} {pos}/{len} iterations, {per_sec}, ETA {eta}"),
-        Budget::Time(limit) => (limit.as_millis() as u64, "{bar:40} {elapsed}/{duration} {msg}"),
-    };
-    let bar = ProgressBar::new(length);
-    bar.set_style(ProgressStyle::with_template(template).ok()?);
-    Some(bar)
+    let Control { resume, stop, checkpoint, record_families, record_techniques } = control;
+    let mut progressive = Progressive::new(scene, settings, resume, record_families, record_techniques)?;
+    let interrupted = run_budget(&mut progressive, settings, stop, checkpoint)?;
+    Ok(progressive.into_output(interrupted))
 }
 
 /// Renders one iteration of a per-pixel integrator into `frame` (overwriting it); returns the

@@ -6,13 +6,16 @@
 //! * [`vcm`]: the VCM engine (light tracing, PPM, BPM, BPT, VCM).
 //! * [`fluorescent`]: wavelength shifts at fluorescent vertices, shared by all integrators.
 //! * [`hash_grid`]: the range search for vertex merging.
-//! * [`driver`]: iterations or a time budget, threads, determinism, progress.
+//! * [`driver`]: the integrators behind one interface, threads, determinism; `render_with`.
+//! * [`progressive`]: one iteration at a time into the film, and the budget loop with
+//!   checkpoints and progress (every front end's loop).
 
 pub mod driver;
 pub mod eye_light;
 pub mod fluorescent;
 pub mod hash_grid;
 pub mod path_tracer;
+pub mod progressive;
 pub mod vcm;
 
 pub use driver::{Algorithm, RenderOutput, RenderSettings, render};

@@ -11,7 +11,7 @@ use scene::Film;
 
 use crate::checkpoint;
 use crate::prepare::Prepared;
-use crate::progressive::Progressive;
+use render::progressive::Progressive;
 
 self_cell::self_cell!(
     /// The prepared session and its render.
@@ -32,8 +32,9 @@ impl Live {
     /// checkpoint's film is continued.
     pub fn start(mut prepared: Prepared) -> Result<Self> {
         let resumed = prepared.resumed.take();
-        let cell =
-            Cell::try_new(prepared, |p| Progressive::new(&p.scene, &p.settings, resumed, p.record_families, p.layout))?;
+        let cell = Cell::try_new(prepared, |p| {
+            Progressive::new(&p.scene, &p.settings, resumed, p.record_families, p.layout).map_err(anyhow::Error::msg)
+        })?;
         Ok(Self { cell })
     }
 
@@ -45,7 +46,7 @@ impl Live {
                 if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
                     return Ok(done);
                 }
-                progressive.step()?;
+                progressive.step().map_err(anyhow::Error::msg)?;
             }
             Ok(iterations)
         })

@@ -10,9 +10,9 @@ use render::vcm::Family;
 use crate::budget::run_budget;
 use crate::outputs::{write_st_images, write_technique_images};
 use crate::prepare::Prepared;
-use crate::progressive::Progressive;
 use crate::request::Request;
 use crate::{Notice, Summary};
+use render::progressive::Progressive;
 
 /// Receives what a session tells the user, and when rendering starts.
 pub trait Observer {
@@ -49,7 +49,8 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
         layout,
         record_families,
     } = prepared;
-    let mut progressive = Progressive::new(&scene, &settings, resumed, record_families, layout)?;
+    let mut progressive =
+        Progressive::new(&scene, &settings, resumed, record_families, layout).map_err(anyhow::Error::msg)?;
     let checkpoint = r.checkpoint.as_deref().map(|path| (path, r.checkpoint_every, &recorded));
     let interrupted = run_budget(&mut progressive, &settings, stop, checkpoint)?;
     let result = progressive.into_output(interrupted);

@@ -1,19 +1,22 @@
-//! A progressive render advanced one iteration at a time: the loop body of every front end.
-//! [`crate::render`] (the command line) steps it until its budget, the Python module's
-//! `Session` steps it when asked; both add every iteration to the film (and to the technique
-//! images, when recorded) through [`Progressive::step`], so they produce the same images.
+//! A progressive render advanced one iteration at a time, and the budget loop over it: the
+//! loop body and the loop of every front end. [`crate::driver::render_with`], the session
+//! crate's `render` (the command line) and the Python module's `Session` all add each iteration
+//! to the film (and the technique images, when recorded) through [`Progressive::step`], so they
+//! produce the same images bit for bit.
 //!
-//! It owns no scene (it borrows one: see [`crate::Live`] for a render that owns its scene), no
-//! budget, no stop flag and no files: the caller decides when to stop and what to write.
+//! [`Progressive`] owns no scene (it borrows one), no budget, no stop flag and no files: the
+//! caller decides when to stop and what to write; [`run_budget`] is the usual caller.
 
+use std::io::IsTerminal;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::{Result, bail};
-use render::RenderSettings;
-use render::driver::Renderer;
-use render::vcm::technique_images::{TechniqueImages, TechniqueLayout};
-use render::vcm::{Family, RejectedCounts};
+use indicatif::{ProgressBar, ProgressStyle};
 use scene::{Film, FrameBuffer, Scene};
+
+use crate::driver::{Budget, RenderOutput, RenderSettings, Renderer, SaveFilm};
+use crate::vcm::technique_images::{TechniqueImages, TechniqueLayout};
+use crate::vcm::{Family, RejectedCounts};
 
 /// A progressive render of a borrowed scene: the integrator with its state, the film and the
 /// optional per-technique images.
@@ -30,7 +33,8 @@ pub struct Progressive<'a> {
 
 impl<'a> Progressive<'a> {
     /// Prepares a render of `scene` as `settings` say (their budget and progress flag are not
-    /// used here). `resume` continues a film: its iteration count is the index of the next
+    /// used here; [`RenderSettings::variance`] decides whether a new film keeps its sums of
+    /// squares). `resume` continues a film: its iteration count is the index of the next
     /// iteration. `record_families` / `record_techniques` accumulate one film per technique
     /// family and one image per (s, t) technique (VCM engine algorithms; ignored by the others
     /// and when resuming, since a checkpoint does not hold them).
@@ -40,16 +44,20 @@ impl<'a> Progressive<'a> {
         resume: Option<Film>,
         record_families: bool,
         record_techniques: Option<TechniqueLayout>,
-    ) -> Result<Self> {
+    ) -> Result<Self, String> {
         let (width, height) = (scene.camera.width, scene.camera.height);
         let film = match resume {
             Some(film) if (film.width(), film.height()) != (width, height) => {
-                bail!("the film to resume is {}x{}, the render {width}x{height}", film.width(), film.height())
+                return Err(format!(
+                    "the film to resume is {}x{}, the render {width}x{height}",
+                    film.width(),
+                    film.height()
+                ));
             }
             Some(film) => film,
             None => Film::with_variance(width, height, settings.variance),
         };
-        let mut renderer = Renderer::starting_at(scene, settings, film.iterations()).map_err(anyhow::Error::msg)?;
+        let mut renderer = Renderer::starting_at(scene, settings, film.iterations())?;
         let fresh = film.iterations() == 0;
         let family_films = match renderer.vcm_engine_mut() {
             Some(engine) if record_families && fresh => {
@@ -77,7 +85,7 @@ impl<'a> Progressive<'a> {
     }
 
     /// Renders the next iteration and adds it to the film (and the technique images).
-    pub fn step(&mut self) -> Result<()> {
+    pub fn step(&mut self) -> Result<(), String> {
         let start = Instant::now();
         let rejected = self.renderer.step();
         self.film.add_iteration(self.renderer.frame(), rejected);
@@ -100,7 +108,7 @@ impl<'a> Progressive<'a> {
             }
         }
         if let (Some(images), Some(values)) = (&mut self.technique_images, engine.and_then(|e| e.technique_frame())) {
-            images.add_iteration(values).map_err(anyhow::Error::msg)?;
+            images.add_iteration(values)?;
         }
         self.elapsed += start.elapsed();
         Ok(())
@@ -136,10 +144,10 @@ impl<'a> Progressive<'a> {
         self.renderer.threads()
     }
 
-    /// The driver's result, as [`render::driver::render_with`] returns it.
-    pub fn into_output(self, interrupted: bool) -> render::driver::RenderOutput {
+    /// The render's result.
+    pub fn into_output(self, interrupted: bool) -> RenderOutput {
         let vcm_stats = self.renderer.vcm_engine().map(|e| e.stats());
-        render::driver::RenderOutput {
+        RenderOutput {
             threads: self.renderer.threads(),
             film: self.film,
             elapsed: self.elapsed,
@@ -151,4 +159,72 @@ impl<'a> Progressive<'a> {
             rejected_by_family: self.rejected_by_family,
         }
     }
+}
+
+/// Steps `progressive` until `settings.budget` is reached (`Iterations` counts a resumed
+/// film's iterations; `Time` this call's time, at least one iteration) or `stop` is set
+/// (checked before each iteration), with a progress bar when `settings.progress` is set and
+/// stderr is a terminal. `checkpoint` saves the film every interval of wall-clock time (after
+/// the iteration that crosses it) and once at the end; its error stops the render. Returns
+/// whether the stop flag ended the render.
+pub fn run_budget(
+    progressive: &mut Progressive,
+    settings: &RenderSettings,
+    stop: Option<&AtomicBool>,
+    mut checkpoint: Option<(Duration, SaveFilm)>,
+) -> Result<bool, String> {
+    let progress = progress_bar(settings);
+    let start = Instant::now();
+    let mut last_checkpoint = Instant::now();
+    let first_iteration = progressive.iterations();
+    let mut interrupted = false;
+    loop {
+        let iteration = progressive.iterations();
+        match settings.budget {
+            Budget::Iterations(n) if iteration >= n => break,
+            Budget::Time(limit) if iteration > first_iteration && start.elapsed() >= limit => break,
+            _ => {}
+        }
+        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            interrupted = true;
+            break;
+        }
+        progressive.step()?;
+        if let Some((every, save)) = &mut checkpoint
+            && last_checkpoint.elapsed() >= *every
+        {
+            save(progressive.film())?;
+            last_checkpoint = Instant::now();
+        }
+        if let Some(bar) = &progress {
+            match settings.budget {
+                Budget::Iterations(_) => bar.set_position(iteration + 1),
+                Budget::Time(_) => {
+                    bar.set_position(start.elapsed().as_millis() as u64);
+                    bar.set_message(format!("{} it", iteration + 1));
+                }
+            }
+        }
+    }
+    if let Some(bar) = progress {
+        bar.finish_and_clear();
+    }
+    if let Some((_, save)) = &mut checkpoint {
+        save(progressive.film())?;
+    }
+    Ok(interrupted)
+}
+
+/// A progress bar on stderr when asked for and stderr is a terminal.
+fn progress_bar(settings: &RenderSettings) -> Option<ProgressBar> {
+    if !settings.progress || !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let (length, template) = match settings.budget {
+        Budget::Iterations(n) => (n, "{bar:40} {pos}/{len} iterations, {per_sec}, ETA {eta}"),
+        Budget::Time(limit) => (limit.as_millis() as u64, "{bar:40} {elapsed}/{duration} {msg}"),
+    };
+    let bar = ProgressBar::new(length);
+    bar.set_style(ProgressStyle::with_template(template).ok()?);
+    Some(bar)
 }
