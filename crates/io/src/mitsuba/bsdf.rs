@@ -454,6 +454,8 @@ impl<'a> Loader<'a> {
                     _ => return Err(p.error("needs one or two nested BSDFs")),
                 }
             }
+            "principled" => self.principled(&p)?,
+            "principledthin" => self.principled_thin(&p)?,
             "fluorescent" => self.fluorescent(&p)?,
             "normalmap" | "bumpmap" => self.perturbing(&p)?,
             "mask" => {

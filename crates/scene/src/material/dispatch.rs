@@ -14,6 +14,8 @@ use super::dielectric::Dielectric;
 use super::diffuse::Diffuse;
 use super::lobe::{ModelEval, Sampled};
 use super::plastic::Plastic;
+use super::principled::Principled;
+use super::principled_thin::PrincipledThin;
 use super::rough_conductor::RoughConductor;
 use super::rough_dielectric::RoughDielectric;
 use super::rough_plastic::RoughPlastic;
@@ -81,6 +83,8 @@ pub(super) enum Model {
     RoughDielectric(RoughDielectric),
     Plastic(Plastic),
     RoughPlastic(RoughPlastic),
+    Principled(Principled),
+    PrincipledThin(PrincipledThin),
 }
 
 /// `each_model!(model, m => expression)`: evaluates the expression with `m` bound to the
@@ -96,6 +100,8 @@ macro_rules! each_model {
             Model::RoughDielectric($m) => $e,
             Model::Plastic($m) => $e,
             Model::RoughPlastic($m) => $e,
+            Model::Principled($m) => $e,
+            Model::PrincipledThin($m) => $e,
         }
     };
 }
@@ -185,6 +191,8 @@ impl Model {
                 *ext_ior,
                 *nonlinear,
             )),
+            Material::Principled(p) => Model::Principled(Principled::new(p, uv)),
+            Material::PrincipledThin(p) => Model::PrincipledThin(PrincipledThin::new(p, uv)),
         };
         Some(model)
     }
