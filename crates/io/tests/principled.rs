@@ -69,6 +69,13 @@ fn every_parameter_loads_as_a_number_or_a_texture() {
     ));
     let Material::Principled(p) = &m else { panic!("{m:?}") };
     assert!(p.textures().iter().all(|t| matches!(t, Texture::Checkerboard { .. })));
+    // Mitsuba reads scalar checkerboards with the colours swapped (`eval_1`), colours as given.
+    let colours = |t: &Texture| match t {
+        Texture::Checkerboard { color0, color1, .. } => (color0.g, color1.g),
+        _ => panic!(),
+    };
+    assert_eq!(colours(&p.base_color), (0.1, 0.9));
+    assert_eq!(colours(&p.metallic), (0.7, 0.2));
     // specular = 0.7 ↔ R0 = 0.08·0.7 = ((η − 1)/(η + 1))².
     let r0 = ((p.eta - 1.0) / (p.eta + 1.0)).powi(2);
     assert!((r0 - 0.056).abs() < 1e-6, "eta {} gives R0 {r0}", p.eta);

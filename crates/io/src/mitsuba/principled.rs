@@ -1,6 +1,7 @@
 //! `<bsdf type="principled">` and `<bsdf type="principledthin">`: Mitsuba 3's Disney BSDFs.
 //! Every parameter is a number or a texture (scalar parameters use the texture's luminance);
-//! constants are checked to lie in Mitsuba's documented ranges. The sampling-rate properties
+//! constants are checked to lie in Mitsuba's documented ranges (scalar checkerboards swapped as
+//! Mitsuba reads them, see `weight`). The sampling-rate properties
 //! only change Mitsuba's sampler, not the image; they are reported as ignored.
 
 use scene::Texture;
@@ -91,9 +92,17 @@ impl<'a> Loader<'a> {
         Ok(Material::PrincipledThin(Box::new(parameters)))
     }
 
-    /// A scalar parameter: a texture, or a number checked to lie in `[0, max]`.
+    /// A scalar parameter: a texture, or a number checked to lie in `[0, max]`. Mitsuba 3's
+    /// `checkerboard` answers scalar lookups (`eval_1`) with its two colours swapped relative to
+    /// its colour lookups (`eval`); the scene files' references are rendered that way, so a
+    /// checkerboard read as a scalar is loaded with `color0` and `color1` exchanged.
     fn weight(&mut self, p: &Plugin<'a>, name: &str, default: f64, max: f64) -> Result<Texture, SceneError> {
-        let texture = self.texture_prop(p, name, default, SpectrumUse::Unbounded)?;
+        let texture = match self.texture_prop(p, name, default, SpectrumUse::Unbounded)? {
+            Texture::Checkerboard { color0, color1, to_uv } => {
+                Texture::Checkerboard { color0: color1, color1: color0, to_uv }
+            }
+            other => other,
+        };
         if let Some(c) = texture.as_constant()
             && !(c.r >= 0.0 && c.max_component() <= max as f32)
         {
