@@ -279,8 +279,10 @@ impl<'a> Loader<'a> {
                 Texture::bitmap(image, to_uv, Sampling { wrap, filter })
             }
             "checkerboard" => {
+                // Unbounded: a checkerboard may drive a parameter beyond [0, 1] (principledthin's
+                // diff_trans ranges to 2), as bitmap texels may.
                 let color = |loader: &mut Self, name: &str, default: f64| -> Result<Rgb, SceneError> {
-                    let t = loader.texture_prop(&p, name, default, SpectrumUse::Reflectance)?;
+                    let t = loader.texture_prop(&p, name, default, SpectrumUse::Unbounded)?;
                     t.as_constant().ok_or_else(|| p.error(format!("'{name}' must be a constant colour")))
                 };
                 let color0 = color(self, "color0", 0.4)?;
@@ -454,6 +456,8 @@ impl<'a> Loader<'a> {
                     _ => return Err(p.error("needs one or two nested BSDFs")),
                 }
             }
+            "principled" => self.principled(&p)?,
+            "principledthin" => self.principled_thin(&p)?,
             "fluorescent" => self.fluorescent(&p)?,
             "normalmap" | "bumpmap" => self.perturbing(&p)?,
             "mask" => {

@@ -38,6 +38,7 @@ mod bsdf;
 mod colour;
 mod emitter;
 mod mask;
+mod principled;
 mod props;
 mod search;
 mod sensor;

@@ -29,6 +29,8 @@ impl Material {
                 f(diffuse_reflectance);
                 f(specular_reflectance);
             }
+            Material::Principled(p) => p.textures().into_iter().for_each(f),
+            Material::PrincipledThin(p) => p.textures().into_iter().for_each(f),
             Material::Blend { weight, first, second } => {
                 f(weight);
                 first.for_each_bsdf_texture(f);

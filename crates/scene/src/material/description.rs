@@ -6,6 +6,8 @@ use spectrum::fluorescence::Fluorescence;
 use spectrum::ior::Ior;
 
 use super::MAX_COMPONENTS;
+use super::principled::PrincipledParameters;
+use super::principled_thin::PrincipledThinParameters;
 use super::reference::ReferenceMaterial;
 use crate::texture::Texture;
 
@@ -122,6 +124,13 @@ pub enum Material {
         /// Account for colour shifts from internal scattering.
         nonlinear: bool,
     },
+    /// Mitsuba 3's `principled` (the Disney BSDF): diffuse, sheen, clearcoat, metallic and
+    /// dielectric GGX reflection and rough transmission, scattering from both sides (from
+    /// behind only through its transmission weight). Anisotropy is aligned with the tangent
+    /// of the shading frame, as for the rough conductor.
+    Principled(Box<PrincipledParameters>),
+    /// Mitsuba 3's `principledthin` (the thin-surface Disney BSDF), the same from both sides.
+    PrincipledThin(Box<PrincipledThinParameters>),
     /// Linear blend `(1 − weight)·first + weight·second`.
     Blend {
         /// Blend weight in [0, 1] (the first channel of the texture is used).

@@ -15,6 +15,8 @@ use super::diffuse::Diffuse;
 use super::diffuse_transmission::DiffuseTransmission;
 use super::lobe::{ModelEval, Sampled};
 use super::plastic::Plastic;
+use super::principled::Principled;
+use super::principled_thin::PrincipledThin;
 use super::rough_conductor::RoughConductor;
 use super::rough_dielectric::RoughDielectric;
 use super::rough_plastic::RoughPlastic;
@@ -83,6 +85,8 @@ pub(super) enum Model {
     RoughDielectric(RoughDielectric),
     Plastic(Plastic),
     RoughPlastic(RoughPlastic),
+    Principled(Principled),
+    PrincipledThin(PrincipledThin),
 }
 
 /// `each_model!(model, m => expression)`: evaluates the expression with `m` bound to the
@@ -99,6 +103,8 @@ macro_rules! each_model {
             Model::RoughDielectric($m) => $e,
             Model::Plastic($m) => $e,
             Model::RoughPlastic($m) => $e,
+            Model::Principled($m) => $e,
+            Model::PrincipledThin($m) => $e,
         }
     };
 }
@@ -194,6 +200,8 @@ impl Model {
                 *ext_ior,
                 *nonlinear,
             )),
+            Material::Principled(p) => Model::Principled(Principled::new(p, uv)),
+            Material::PrincipledThin(p) => Model::PrincipledThin(PrincipledThin::new(p, uv)),
         };
         Some(model)
     }

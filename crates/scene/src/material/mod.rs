@@ -45,8 +45,10 @@
 //! Each leaf model lives in its own file with its evaluated parameters, evaluation, sampling,
 //! forward and reverse solid-angle pdfs, lobe probabilities, albedo (the continuation
 //! probability is the largest channel of the blended albedo, taken in `mixture`):
-//! `diffuse`, `diffuse_transmission`, `conductor`, `rough_conductor`, `dielectric`, `thin_dielectric`,
-//! `rough_dielectric`, `plastic`, `rough_plastic` (these two share `coating`), and
+//! `diffuse`, `diffuse_transmission`, `conductor`, `rough_conductor`, `dielectric`,
+//! `thin_dielectric`, `rough_dielectric`, `plastic`, `rough_plastic` (these two share
+//! `coating`), `principled` and `principled_thin` (sharing `disney`; the clearcoat lobe in
+//! `clearcoat`), and
 //! SmallVCM's `reference` material, which keeps its own BSDF. Shared helpers have their own
 //! files: `fresnel`, `lobe` (sample/evaluation records), `shading` (shading point,
 //! transport mode, side tests), GGX in [`crate::microfacet`]. `dispatch` holds the one closed
@@ -67,12 +69,14 @@ use math::COSINE_EPSILON;
 mod attributes;
 mod bsdf;
 mod bump_map;
+mod clearcoat;
 mod coating;
 mod conductor;
 mod description;
 mod dielectric;
 mod diffuse;
 mod diffuse_transmission;
+mod disney;
 mod dispatch;
 mod fresnel;
 mod lobe;
@@ -80,6 +84,8 @@ mod mixture;
 mod normal_map;
 mod perturb;
 mod plastic;
+mod principled;
+mod principled_thin;
 mod query;
 mod reference;
 mod rough_conductor;
@@ -93,6 +99,8 @@ pub use bump_map::luminance_gradient;
 pub use description::Material;
 pub use fresnel::fresnel_dielectric;
 pub use perturb::SurfaceTangents;
+pub use principled::PrincipledParameters;
+pub use principled_thin::PrincipledThinParameters;
 pub use query::{BsdfEval, BsdfSample, LobeKind, PdfPair};
 pub use reference::ReferenceMaterial;
 pub use shading::{ShadingPoint, TransportMode};
