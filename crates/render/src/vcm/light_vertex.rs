@@ -19,7 +19,16 @@
 //!   ([`scene::Texture::MeshAttribute`]): a vertex whose material reads a mesh attribute (such a
 //!   material reads no uv texture in VCM, the driver checks) stores the attribute's three
 //!   channels rounded to the 21 most significant bits of their `f32` (sign, exponent and
-//!   12 mantissa bits: relative error ≤ 2⁻¹³ ≈ 1.2·10⁻⁴), others store uv exactly.
+//!   12 mantissa bits: relative error ≤ 2⁻¹³ ≈ 1.2·10⁻⁴), others store uv exactly;
+//! - a vertex whose material is anisotropic ([`Scene::material_is_anisotropic`]) needs its
+//!   surface tangent to rebuild the BSDF's frame: it stores the tangent's angle about the
+//!   (decoded) shading normal, measured from the `x` axis of [`math::Frame::from_z`], in 16
+//!   bits (error ≤ π/2¹⁶ ≈ 4.8·10⁻⁵ rad, plus the shading normal's 5·10⁻⁵ rad), in the low 8
+//!   mantissa bits of each of `u` and `v`, which are rounded to 16 mantissa bits for it
+//!   (relative error ≤ 2⁻¹⁶ ≈ 1.5·10⁻⁵). Isotropic materials keep the exact uv and no tangent,
+//!   so their vertices are unchanged; an anisotropic material that reads a mesh attribute has
+//!   no bits left for the tangent and is rebuilt in the frame of `Frame::from_z` (documented
+//!   deviation; no loader produces one).
 //!
 //! A [`LightVertex`] is its [`MergeRecord`] (what merging reads) plus normals and texture
 //! coordinates; the memory-efficient mode keeps only the records.
@@ -27,7 +36,7 @@
 //! Everything else (position, throughput, texture coordinates, continuation probability) is
 //! stored at full `f32` precision.
 
-use math::{Vec2, Vec3, octahedral};
+use math::{Frame, Vec2, Vec3, octahedral};
 use scene::{Bsdf, Scene, ShadingPoint, TransportMode};
 use spectrum::{Rgb, SpectralMode};
 
@@ -140,6 +149,9 @@ pub struct VertexData<S> {
     pub shading_normal: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// ∂p/∂u at the vertex when its material is anisotropic
+    /// ([`Scene::material_is_anisotropic`]), `None` otherwise.
+    pub tangent: Option<Vec3>,
     /// The mesh attribute value at the vertex when its material reads one
     /// ([`Scene::material_reads_mesh_attribute`]); it is then stored instead of `uv`.
     pub attribute: Option<Rgb>,
@@ -172,14 +184,16 @@ impl<S: SpectralMode> LightVertex<S> {
             record,
             normal: octahedral::encode(data.normal),
             shading_normal: octahedral::encode(data.shading_normal),
-            texture: match data.attribute {
-                Some(value) => pack_rgb(value),
-                None => [data.uv.x.to_bits(), data.uv.y.to_bits()],
+            texture: match (data.attribute, data.tangent) {
+                (Some(value), _) => pack_rgb(value),
+                (None, Some(tangent)) => pack_uv_angle(data.uv, tangent_angle(data.shading_normal, tangent)),
+                (None, None) => [data.uv.x.to_bits(), data.uv.y.to_bits()],
             },
         }
     }
 
-    /// Texture coordinates (meaningless when the material reads a mesh attribute).
+    /// Texture coordinates (meaningless when the material reads a mesh attribute; for an
+    /// anisotropic material within a relative 2⁻¹⁵ of the exact ones, see the module doc).
     #[inline]
     pub fn uv(&self) -> Vec2 {
         Vec2::new(f32::from_bits(self.texture[0]), f32::from_bits(self.texture[1]))
@@ -189,17 +203,17 @@ impl<S: SpectralMode> LightVertex<S> {
     #[inline]
     pub fn bsdf(&self, scene: &Scene, hero: Option<f32>) -> Option<Bsdf> {
         let material = self.record.material();
-        let (uv, attribute) = if scene.material_reads_mesh_attribute(material) {
-            (Vec2::ZERO, unpack_rgb(self.texture))
+        let shading_normal = octahedral::decode(self.shading_normal);
+        let (uv, attribute, tangent) = if scene.material_reads_mesh_attribute(material) {
+            (Vec2::ZERO, unpack_rgb(self.texture), Vec3::ZERO)
+        } else if scene.material_is_anisotropic(material) {
+            let (uv, angle) = unpack_uv_angle(self.texture);
+            (uv, Rgb::BLACK, tangent_from_angle(shading_normal, angle))
         } else {
-            (self.uv(), Rgb::BLACK)
+            (self.uv(), Rgb::BLACK, Vec3::ZERO)
         };
-        let point = ShadingPoint {
-            geometric_normal: octahedral::decode(self.normal),
-            shading_normal: octahedral::decode(self.shading_normal),
-            uv,
-            attribute,
-        };
+        let point =
+            ShadingPoint { geometric_normal: octahedral::decode(self.normal), shading_normal, uv, tangent, attribute };
         let material = &scene.materials[self.record.material() as usize];
         Bsdf::new_at(material, &point, self.record.fixed(), TransportMode::Importance, hero)
     }
@@ -209,6 +223,44 @@ impl<S: SpectralMode> LightVertex<S> {
     pub fn fluorescent<'s>(&self, scene: &'s Scene) -> Option<crate::fluorescent::FluorescentVertex<'s>> {
         crate::fluorescent::FluorescentVertex::at(&scene.materials[self.record.material() as usize], self.uv())
     }
+}
+
+/// The angle of `tangent` about the shading normal `normal` as decoded from its octahedral
+/// code, from the `x` axis of `Frame::from_z` of that normal, as a fraction of a turn in
+/// 16 bits (0 when the tangent is parallel to the normal).
+#[inline]
+fn tangent_angle(normal: Vec3, tangent: Vec3) -> u16 {
+    let frame = Frame::from_z(octahedral::decode(octahedral::encode(normal)));
+    let angle = tangent.dot(frame.y).atan2(tangent.dot(frame.x));
+    let turns = if angle.is_finite() { angle / std::f32::consts::TAU } else { 0.0 };
+    ((turns * 65536.0).round() as i32).rem_euclid(65536) as u16
+}
+
+/// The unit tangent at `angle` (see [`tangent_angle`]) about the decoded shading normal.
+#[inline]
+fn tangent_from_angle(normal: Vec3, angle: u16) -> Vec3 {
+    let frame = Frame::from_z(normal);
+    let (sin, cos) = (angle as f32 * (std::f32::consts::TAU / 65536.0)).sin_cos();
+    frame.x * cos + frame.y * sin
+}
+
+/// `u` and `v` rounded to 16 mantissa bits, with the angle's high byte in the low 8 bits of
+/// `u` and its low byte in those of `v`.
+#[inline]
+fn pack_uv_angle(uv: Vec2, angle: u16) -> [u32; 2] {
+    let round = |x: f32| -> u32 {
+        let bits = x.to_bits();
+        let magnitude = (bits & 0x7fff_ffff).saturating_add(0x80).min(0x7f7f_ff00) & !0xff;
+        (bits & 0x8000_0000) | magnitude
+    };
+    [round(uv.x) | u32::from(angle >> 8), round(uv.y) | u32::from(angle & 0xff)]
+}
+
+/// The inverse of [`pack_uv_angle`] (up to its rounding).
+#[inline]
+fn unpack_uv_angle(texture: [u32; 2]) -> (Vec2, u16) {
+    let uv = Vec2::new(f32::from_bits(texture[0] & !0xff), f32::from_bits(texture[1] & !0xff));
+    (uv, ((texture[0] & 0xff) << 8 | (texture[1] & 0xff)) as u16)
 }
 
 /// Low bits dropped from each channel's `f32` by [`pack_rgb`].
@@ -381,6 +433,7 @@ mod tests {
             normal: Vec3::new(0.3, -0.4, 0.866).normalize(),
             shading_normal: Vec3::new(0.2, -0.5, 0.8).normalize(),
             uv: Vec2::new(0.1 * f, 12.5),
+            tangent: None,
             attribute: None,
             fixed: Vec3::new(-0.6, 0.0, 0.8),
             continuation: 0.75,

@@ -7,6 +7,7 @@ use spectrum::ior::Ior;
 
 use super::MAX_COMPONENTS;
 use super::reference::ReferenceMaterial;
+use crate::microfacet::Distribution;
 use crate::texture::Texture;
 
 /// A material: the closed set of scattering models the renderer knows. Index-of-refraction
@@ -32,8 +33,10 @@ pub enum Material {
         /// Factor on the reflection.
         specular_reflectance: Texture,
     },
-    /// GGX microfacet conductor with visible-normal sampling.
+    /// Microfacet conductor with visible-normal sampling.
     RoughConductor {
+        /// GGX or Beckmann.
+        distribution: Distribution,
         /// Roughness along the tangent.
         alpha_u: f32,
         /// Roughness along the bitangent.
@@ -71,8 +74,10 @@ pub enum Material {
         /// Factor on transmission.
         specular_transmittance: Texture,
     },
-    /// GGX microfacet dielectric (Walter et al. 2007).
+    /// Microfacet dielectric (Walter et al. 2007).
     RoughDielectric {
+        /// GGX or Beckmann.
+        distribution: Distribution,
         /// Roughness along the tangent.
         alpha_u: f32,
         /// Roughness along the bitangent.
@@ -99,9 +104,11 @@ pub enum Material {
         /// Account for colour shifts from internal scattering (Mitsuba's `nonlinear`).
         nonlinear: bool,
     },
-    /// Diffuse base under a rough (GGX) dielectric coating (Mitsuba's `roughplastic`).
+    /// Diffuse base under a rough dielectric coating (Mitsuba's `roughplastic`).
     RoughPlastic {
-        /// Isotropic GGX roughness of the coating.
+        /// GGX or Beckmann.
+        distribution: Distribution,
+        /// Isotropic roughness of the coating.
         alpha: f32,
         /// Reflectance of the base.
         diffuse_reflectance: Texture,

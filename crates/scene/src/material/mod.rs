@@ -81,6 +81,7 @@ mod perturb;
 mod plastic;
 mod query;
 mod reference;
+mod rough_coating;
 mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;
