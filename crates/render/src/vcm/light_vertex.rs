@@ -23,7 +23,8 @@
 //! - a vertex whose material is anisotropic ([`Scene::material_is_anisotropic`]) needs its
 //!   surface tangent to rebuild the BSDF's frame: it stores the tangent's angle about the
 //!   (decoded) shading normal, measured from the `x` axis of [`math::Frame::from_z`], in 16
-//!   bits (error ≤ π/2¹⁶ ≈ 4.8·10⁻⁵ rad, plus the shading normal's 5·10⁻⁵ rad), in the low 8
+//!   bits (error ≤ π/2¹⁶ ≈ 4.8·10⁻⁵ rad, plus the shading normal's 5·10⁻⁵ rad over the sine of
+//!   the angle between ∂p/∂u and the normal, about 1 for a mesh), in the low 8
 //!   mantissa bits of each of `u` and `v`, which are rounded to 16 mantissa bits for it
 //!   (relative error ≤ 2⁻¹⁶ ≈ 1.5·10⁻⁵). Isotropic materials keep the exact uv and no tangent,
 //!   so their vertices are unchanged; an anisotropic material that reads a mesh attribute has
@@ -480,6 +481,41 @@ mod tests {
         assert!(worst <= 2f64.powi(-13), "relative error {worst}");
         assert!(worst > 2f64.powi(-14), "relative error {worst}");
         assert_eq!(unpack_rgb(pack_rgb(Rgb::new(0.0, 1.0, 0.5))), Rgb::new(0.0, 1.0, 0.5));
+    }
+
+    /// uv and a tangent angle share the texture words: uv within a relative 2⁻¹⁶, the tangent
+    /// within 1.5·10⁻⁴ rad of the exact one projected into the tangent plane of the shading
+    /// normal, for ∂p/∂u at least 45° from the normal (the angle's half step π/2¹⁶ plus the
+    /// normal's 5·10⁻⁵ rad over sin 45°); a coarser angle (8 bits) exceeds that bound.
+    #[test]
+    fn packed_tangent_angles_round_trip() {
+        let mut rng = math::Rng::for_stream(9, 0, 0);
+        let (mut worst_uv, mut worst_angle, mut worst_coarse) = (0.0f64, 0.0f32, 0.0f32);
+        for _ in 0..20_000 {
+            let normal = math::warp::uniform_sphere(rng.uniform2());
+            // ∂p/∂u at least 45° away from the normal (it is orthogonal to the geometric normal).
+            let frame = Frame::from_z(normal);
+            let phi = std::f32::consts::TAU * rng.uniform();
+            let along = frame.x * phi.cos() + frame.y * phi.sin() + normal * (2.0 * rng.uniform() - 1.0);
+            let tangent = along * (0.1 + 3.0 * rng.uniform());
+            let uv = Vec2::new(rng.uniform() * 4.0 - 1.0, rng.uniform() * 30.0);
+            let angle = tangent_angle(normal, tangent);
+            let (back_uv, back_angle) = unpack_uv_angle(pack_uv_angle(uv, angle));
+            assert_eq!(back_angle, angle);
+            for (a, b) in [(uv.x, back_uv.x), (uv.y, back_uv.y)] {
+                worst_uv = worst_uv.max(((f64::from(b) - f64::from(a)) / f64::from(a)).abs());
+            }
+            let decoded = octahedral::decode(octahedral::encode(normal));
+            let exact = (tangent - normal * normal.dot(tangent)).normalize();
+            let back = tangent_from_angle(decoded, angle);
+            assert!((back.length() - 1.0).abs() < 1e-5 && back.dot(decoded).abs() < 1e-5);
+            worst_angle = worst_angle.max(back.cross(exact).length());
+            let coarse = tangent_from_angle(decoded, angle & 0xff00);
+            worst_coarse = worst_coarse.max(coarse.cross(exact).length());
+        }
+        assert!(worst_uv <= 2f64.powi(-16), "uv relative error {worst_uv}");
+        assert!(worst_angle < 1.5e-4, "tangent error {worst_angle} rad");
+        assert!(worst_coarse > 1.5e-4, "8-bit angles: {worst_coarse} rad");
     }
 
     /// A stored vertex whose material reads a mesh attribute rebuilds the BSDF of the exact

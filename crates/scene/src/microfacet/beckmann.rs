@@ -12,7 +12,8 @@ use super::erf::{erfc, solve_increasing};
 const INV_SQRT_PI: f64 = 0.564_189_583_547_756_3;
 
 /// `D(m) = exp(−(mx²/αx² + my²/αy²)/mz²) / (π αx αy mz⁴)` per unit solid angle, 0 below the
-/// surface.
+/// surface and, as in Mitsuba, where `D(m) cos θm ≤ 10⁻²⁰` (the far tail, which holds less
+/// than 10⁻¹⁹ of the normalisation: it only keeps denormal garbage out of the images).
 #[inline]
 pub(super) fn d(ax: f32, ay: f32, m: Vec3) -> f32 {
     if m.z <= 0.0 {
@@ -21,7 +22,7 @@ pub(super) fn d(ax: f32, ay: f32, m: Vec3) -> f32 {
     let z2 = sqr(m.z);
     let exponent = -(sqr(m.x / ax) + sqr(m.y / ay)) / z2;
     let value = INV_PI * exponent.exp() / (ax * ay * sqr(z2));
-    if value.is_finite() { value } else { 0.0 }
+    if value.is_finite() && value * m.z > 1e-20 { value } else { 0.0 }
 }
 
 /// `a = 1/(α tan θ)` of the direction `w`, with `α` the roughness projected on its azimuth:
