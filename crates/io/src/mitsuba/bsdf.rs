@@ -204,7 +204,8 @@ impl<'a> Loader<'a> {
             &["alpha", "alpha"]
         };
         if names.iter().any(|n| textured(n)) {
-            let mut texture = |name: &str| self.texture_prop(p, name, 0.1, SpectrumUse::Unbounded);
+            let mut texture =
+                |name: &str| self.texture_prop(p, name, 0.1, SpectrumUse::Unbounded).map(float_evaluation);
             let alpha_u = texture(names[0])?;
             let alpha_v = if names[1] == names[0] { alpha_u.clone() } else { texture(names[1])? };
             return Ok((distribution, Roughness::Textured(alpha_u, alpha_v)));
@@ -561,7 +562,19 @@ impl<'a> Loader<'a> {
     }
 }
 
-/// A rough material's GGX α: numbers, or textures evaluated at each hit.
+/// A texture as Mitsuba evaluates it as a float (`eval_1`, what roughness reads): a checkerboard
+/// there takes `color0` where the parities of `u` and `v` differ, the opposite of its colour
+/// evaluation (Mitsuba 2 and 3, "legacy scalar checkerboard convention"), so its colours swap.
+fn float_evaluation(texture: Texture) -> Texture {
+    match texture {
+        Texture::Checkerboard { color0, color1, to_uv } => {
+            Texture::Checkerboard { color0: color1, color1: color0, to_uv }
+        }
+        other => other,
+    }
+}
+
+/// A rough material's α: numbers, or textures evaluated at each hit.
 enum Roughness {
     /// `(α_u, α_v)`.
     Constant(f32, f32),
