@@ -1,6 +1,7 @@
 //! The pbrt-v4 loader: tokenizer, every supported directive, shape, material, texture and
 //! light on small scenes, errors with positions, and the Cornell box twin of the Mitsuba scene.
 
+use scene::microfacet::Distribution;
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -412,7 +413,7 @@ fn conductors() {
     }
     // remaproughness (default): α = √roughness.
     match m(1) {
-        Material::RoughConductor { alpha_u, alpha_v, eta, .. } => {
+        Material::RoughConductor { distribution: Distribution::Ggx, alpha_u, alpha_v, eta, .. } => {
             assert!((alpha_u - 0.2).abs() < 1e-6 && (alpha_v - 0.2).abs() < 1e-6);
             assert!(
                 (eta.b - (1.426000 + (1.345875 - 1.426000) * (464.3 - 459.200653) / (467.864838 - 459.200653)) as f32)
@@ -425,6 +426,7 @@ fn conductors() {
     assert_eq!(
         m(2),
         Material::RoughConductor {
+            distribution: Distribution::Ggx,
             alpha_u: 0.09,
             alpha_v: 0.01,
             eta: Rgb::new(0.2, 0.3, 0.4),
@@ -469,7 +471,7 @@ fn dielectrics_mix_and_unsupported_materials() {
         }
     );
     match m(1) {
-        Material::RoughDielectric { alpha_u, int_ior, .. } => {
+        Material::RoughDielectric { distribution: Distribution::Ggx, alpha_u, int_ior, .. } => {
             assert!((alpha_u - 0.1).abs() < 1e-6);
             assert!((int_ior - 1.5168).abs() < 1e-4);
         }

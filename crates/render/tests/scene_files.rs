@@ -6,6 +6,7 @@
 
 mod common;
 
+use scene::microfacet::Distribution;
 use std::path::PathBuf;
 
 use math::{Rng, Vec3};
@@ -138,6 +139,7 @@ fn ggx_conductor_furnace_loses_energy_only_to_single_scattering() {
     // model (paths that would scatter again between microfacets are dropped).
     let alpha = 0.3;
     let material = Material::RoughConductor {
+        distribution: Distribution::Ggx,
         alpha_u: alpha,
         alpha_v: alpha,
         eta: Rgb::BLACK,

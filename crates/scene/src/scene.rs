@@ -74,6 +74,9 @@ pub struct SurfaceHit {
     pub shading_normal: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// ∂p/∂u (world space, not normalised) when the material is anisotropic
+    /// ([`Material::is_anisotropic`]), else zero (see [`ShadingPoint::tangent`]).
+    pub tangent: Vec3,
     /// The value of the mesh attribute the material reads (interpolated), black if none.
     pub attribute: Rgb,
     /// Distance along the ray from its origin.
@@ -95,6 +98,7 @@ impl SurfaceHit {
             geometric_normal: self.normal,
             shading_normal: self.shading_normal,
             uv: self.uv,
+            tangent: self.tangent,
             attribute: self.attribute,
         }
     }
@@ -132,6 +136,8 @@ pub struct Scene {
     light_selection: Option<Distribution1D>,
     /// By material index: whether the material reads a mesh attribute.
     reads_mesh_attribute: Vec<bool>,
+    /// Per material: [`Material::is_anisotropic`] (hits then carry ∂p/∂u).
+    anisotropic: Vec<bool>,
     bvh: Bvh,
 }
 
@@ -175,6 +181,7 @@ impl Scene {
         // none), nothing is.
         let light_selection = Distribution1D::new(&powers);
         let reads_mesh_attribute = materials.iter().map(|m| matches!(m.mesh_attribute(), Ok(Some(_)))).collect();
+        let anisotropic = materials.iter().map(Material::is_anisotropic).collect();
         Self {
             name: name.into(),
             primitives,
@@ -190,6 +197,7 @@ impl Scene {
             light_spectra: Vec::new(),
             light_selection,
             reads_mesh_attribute,
+            anisotropic,
             bvh,
         }
     }
@@ -199,6 +207,13 @@ impl Scene {
     #[inline]
     pub fn material_reads_mesh_attribute(&self, index: u32) -> bool {
         self.reads_mesh_attribute.get(index as usize).copied().unwrap_or(false)
+    }
+
+    /// Whether material `index` is anisotropic ([`Material::is_anisotropic`]): its hits carry
+    /// ∂p/∂u in [`SurfaceHit::tangent`].
+    #[inline]
+    pub fn material_is_anisotropic(&self, index: u32) -> bool {
+        self.anisotropic.get(index as usize).copied().unwrap_or(false)
     }
 
     /// Sets the surface attributes that primitives refer to.
@@ -250,11 +265,13 @@ impl Scene {
         if index < world_primitives {
             let primitive = &self.primitives[index as usize];
             let (normal, shading_normal, uv, attribute) = self.local_surface(primitive, position);
+            let tangent = self.tangent(primitive, position, normal);
             return Some(SurfaceHit {
                 position,
                 normal,
                 shading_normal,
                 uv,
+                tangent,
                 attribute,
                 distance,
                 primitive: index,
@@ -267,11 +284,13 @@ impl Scene {
         let primitive = &self.objects[instance.object as usize].primitives[object_primitive as usize];
         let local_position = instance.to_object_ray(ray).at(distance);
         let (normal, shading_normal, uv, attribute) = self.local_surface(primitive, local_position);
+        let tangent = self.tangent(primitive, local_position, normal);
         Some(SurfaceHit {
             position,
             normal: instance.normal_to_world(normal),
             shading_normal: instance.normal_to_world(shading_normal),
             uv,
+            tangent: instance.to_world.transform_vector3(tangent),
             attribute,
             distance,
             primitive: object_primitive,
@@ -339,13 +358,30 @@ impl Scene {
         shading_normal: Vec3,
         uv: Vec2,
     ) -> Vec3 {
-        let (dp_du, dp_dv) = match (&primitive.shape, self.attributes.get(primitive.attributes as usize)) {
+        let (dp_du, dp_dv) = self.differentials(primitive, position, geometric_normal);
+        material.perturbed_shading_normal(&SurfaceTangents { geometric_normal, shading_normal, uv, dp_du, dp_dv })
+    }
+
+    /// ∂p/∂u and ∂p/∂v of `primitive` at `position` (its own space) from [`crate::tangent`].
+    #[inline]
+    fn differentials(&self, primitive: &Primitive, position: Vec3, geometric_normal: Vec3) -> (Vec3, Vec3) {
+        match (&primitive.shape, self.attributes.get(primitive.attributes as usize)) {
             (Shape::Triangle(t), Some(SurfaceAttributes::Triangle { uvs, .. })) => tangent::triangle(t, *uvs),
             (Shape::Triangle(t), _) => tangent::triangle(t, None),
             (Shape::Sphere(s), _) => tangent::sphere(s, position),
-            (Shape::Disk(_), _) => tangent::fallback(geometric_normal),
-        };
-        material.perturbed_shading_normal(&SurfaceTangents { geometric_normal, shading_normal, uv, dp_du, dp_dv })
+            (Shape::Disk(d), _) => tangent::disk(d, position, geometric_normal),
+        }
+    }
+
+    /// ∂p/∂u of `primitive` at `position` (its own space) when its material is anisotropic,
+    /// zero otherwise.
+    #[inline]
+    fn tangent(&self, primitive: &Primitive, position: Vec3, geometric_normal: Vec3) -> Vec3 {
+        if self.anisotropic.get(primitive.material as usize).copied().unwrap_or(false) {
+            self.differentials(primitive, position, geometric_normal).0
+        } else {
+            Vec3::ZERO
+        }
     }
 
     /// True when something blocks the segment from `point` along unit `direction` over the

@@ -3,6 +3,7 @@
 //! BSDF of a mapped material (its sampler against its pdf, and its energy against the tilted
 //! surface's sky-view factor `(1 + cos a)/2`).
 
+use scene::microfacet::Distribution;
 use std::sync::Arc;
 
 use math::{Frame, Rng, Vec2, Vec3};
@@ -133,6 +134,7 @@ fn mapped_point(material: &Material, t: &SurfaceTangents) -> ShadingPoint {
         geometric_normal: t.geometric_normal,
         shading_normal: material.perturbed_shading_normal(t),
         uv: t.uv,
+        tangent: t.dp_du,
         attribute: spectrum::Rgb::BLACK,
     }
 }
@@ -152,6 +154,7 @@ fn normal_mapped_rough_conductor_sampler_matches_its_pdf() {
     let material = normal_map(
         tilted(0.5),
         Material::RoughConductor {
+            distribution: Distribution::Ggx,
             alpha_u: 0.3,
             alpha_v: 0.1,
             eta: Rgb::new(0.2, 0.9, 1.1),
@@ -232,6 +235,7 @@ fn maps_only_as_the_outermost_material() {
 
 fn rough_conductor(alpha_u: f32, alpha_v: f32) -> Material {
     Material::RoughConductor {
+        distribution: Distribution::Ggx,
         alpha_u,
         alpha_v,
         eta: Rgb::new(0.2, 0.9, 1.1),
@@ -280,6 +284,7 @@ fn textured_roughness_is_the_rough_model_at_the_texture_value() {
     assert_same_bsdf(&m, &rough_conductor(0.3, 0.05), Vec2::new(0.7, 0.2), "checkerboard cell 1");
     // The rough dielectric and the (isotropic, α_u) rough plastic.
     let dielectric = |u: f32, v: f32| Material::RoughDielectric {
+        distribution: Distribution::Ggx,
         alpha_u: u,
         alpha_v: v,
         int_ior: 1.5,
@@ -294,6 +299,7 @@ fn textured_roughness_is_the_rough_model_at_the_texture_value() {
         "dielectric",
     );
     let plastic = |a: f32| Material::RoughPlastic {
+        distribution: Distribution::Ggx,
         alpha: a,
         diffuse_reflectance: c(0.5),
         specular_reflectance: c(1.0),

@@ -6,7 +6,7 @@
 
 use math::{Frame, Rng, Vec3, sqr};
 use scene::material::fresnel_dielectric;
-use scene::microfacet::{Ggx, fresnel_conductor, fresnel_diffuse_reflectance};
+use scene::microfacet::{Distribution, Microfacet, fresnel_conductor, fresnel_diffuse_reflectance};
 use scene::{Bsdf, LobeKind, Material, ShadingPoint, Texture, TransportMode};
 use spectrum::Rgb;
 use testkit::{Integration, MeanVar, assert_chi2, chi2_sphere, chi2_sphere_with, sidak};
@@ -22,7 +22,13 @@ fn tilted_point() -> ShadingPoint {
     let n = geometric_normal();
     let frame = Frame::from_z(n);
     let shading = (n + 0.18 * frame.x - 0.05 * frame.y).normalize();
-    ShadingPoint { geometric_normal: n, shading_normal: shading, uv: math::Vec2::ZERO, attribute: Rgb::BLACK }
+    ShadingPoint {
+        geometric_normal: n,
+        shading_normal: shading,
+        uv: math::Vec2::ZERO,
+        tangent: Vec3::ZERO,
+        attribute: Rgb::BLACK,
+    }
 }
 
 fn flat_point() -> ShadingPoint {
@@ -53,7 +59,14 @@ fn diffuse() -> Material {
 }
 
 fn rough_conductor(alpha_u: f32, alpha_v: f32) -> Material {
-    Material::RoughConductor { alpha_u, alpha_v, eta: CU_ETA, k: CU_K, specular_reflectance: white() }
+    Material::RoughConductor {
+        distribution: Distribution::Ggx,
+        alpha_u,
+        alpha_v,
+        eta: CU_ETA,
+        k: CU_K,
+        specular_reflectance: white(),
+    }
 }
 
 fn dielectric(int_ior: f32, ext_ior: f32) -> Material {
@@ -68,6 +81,7 @@ fn dielectric(int_ior: f32, ext_ior: f32) -> Material {
 
 fn rough_dielectric(alpha_u: f32, alpha_v: f32, int_ior: f32, ext_ior: f32) -> Material {
     Material::RoughDielectric {
+        distribution: Distribution::Ggx,
         alpha_u,
         alpha_v,
         int_ior,
@@ -89,6 +103,7 @@ fn plastic(int_ior: f32, nonlinear: bool) -> Material {
 
 fn rough_plastic(alpha: f32, nonlinear: bool) -> Material {
     Material::RoughPlastic {
+        distribution: Distribution::Ggx,
         alpha,
         diffuse_reflectance: constant(0.5, 0.3, 0.2),
         specular_reflectance: white(),
@@ -96,6 +111,17 @@ fn rough_plastic(alpha: f32, nonlinear: bool) -> Material {
         ext_ior: 1.0,
         nonlinear,
     }
+}
+
+/// The rough model `m` with a Beckmann distribution in place of GGX.
+fn beckmann(mut m: Material) -> Material {
+    match &mut m {
+        Material::RoughConductor { distribution, .. }
+        | Material::RoughDielectric { distribution, .. }
+        | Material::RoughPlastic { distribution, .. } => *distribution = Distribution::Beckmann,
+        _ => panic!("not a rough model"),
+    }
+    m
 }
 
 fn blend(weight: f32, first: Material, second: Material) -> Material {
@@ -143,6 +169,10 @@ fn cases() -> Vec<Case> {
         case("rough dielectric α 1, 1.5", rough_dielectric(1.0, 1.0, 1.5, 1.0), true),
         case("rough dielectric α 0.3, 1/1.5", rough_dielectric(0.3, 0.3, 1.0, 1.5), true),
         case("rough dielectric α 0.1 × 0.4, 1.5", rough_dielectric(0.1, 0.4, 1.5, 1.0), true),
+        case("beckmann conductor α 0.3 × 0.08", beckmann(rough_conductor(0.3, 0.08)), false),
+        case("beckmann dielectric α 0.3, 1.5", beckmann(rough_dielectric(0.3, 0.3, 1.5, 1.0)), true),
+        case("beckmann dielectric α 0.05 × 0.2, 1/1.5", beckmann(rough_dielectric(0.05, 0.2, 1.0, 1.5)), true),
+        case("beckmann plastic α 0.2", beckmann(rough_plastic(0.2, false)), false),
         case("plastic 1.5", plastic(1.5, false), false),
         case("plastic 1.9 nonlinear", plastic(1.9, true), false),
         case("rough plastic α 0.05", rough_plastic(0.05, false), false),
@@ -401,6 +431,7 @@ fn ggx_conductor_albedo_loses_energy_only_to_single_scattering() {
         let mut previous = f64::INFINITY;
         for alpha in [0.1f32, 0.5, 1.0] {
             let material = Material::RoughConductor {
+                distribution: Distribution::Ggx,
                 alpha_u: alpha,
                 alpha_v: alpha,
                 eta: Rgb::BLACK,
@@ -508,7 +539,7 @@ fn visible_normal_sampler_matches_its_pdf() {
     let significance = sidak(1e-3, 6);
     let mut seed = 40;
     for (ax, ay) in [(0.05f32, 0.05f32), (0.3, 0.3), (1.0, 0.2)] {
-        let ggx = Ggx::new(ax, ay);
+        let ggx = Microfacet::ggx(ax, ay);
         for cos in [0.9f32, 0.15] {
             let w = Vec3::new((1.0 - cos * cos).sqrt() * 0.6, (1.0 - cos * cos).sqrt() * 0.8, cos);
             seed += 1;

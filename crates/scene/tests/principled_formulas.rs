@@ -26,7 +26,13 @@ fn thin(edit: impl FnOnce(&mut PrincipledThinParameters)) -> Material {
 }
 
 fn point() -> ShadingPoint {
-    ShadingPoint { geometric_normal: Vec3::Z, shading_normal: Vec3::Z, uv: Vec2::ZERO, attribute: Rgb::BLACK }
+    ShadingPoint {
+        geometric_normal: Vec3::Z,
+        shading_normal: Vec3::Z,
+        uv: Vec2::ZERO,
+        tangent: Vec3::ZERO,
+        attribute: Rgb::BLACK,
+    }
 }
 
 fn direction(theta_degrees: f32, phi: f32) -> Vec3 {
@@ -70,6 +76,7 @@ fn white_metal_is_the_ggx_mirror_conductor() {
             eta: Rgb::BLACK,
             k: Rgb::BLACK,
             specular_reflectance: c(1.0),
+            distribution: scene::microfacet::Distribution::Ggx,
         };
         let mut compared = 0;
         for (a, b) in pairs(5, 2000) {
@@ -99,6 +106,7 @@ fn white_full_transmission_is_the_rough_dielectric() {
         ext_ior: 1.0,
         specular_reflectance: c(1.0),
         specular_transmittance: c(1.0),
+        distribution: scene::microfacet::Distribution::Ggx,
     };
     let mut compared = [0; 2];
     for mode in [TransportMode::Radiance, TransportMode::Importance] {

@@ -25,7 +25,13 @@ fn tilted_point() -> ShadingPoint {
     let n = geometric_normal();
     let frame = Frame::from_z(n);
     let shading = (n + 0.18 * frame.x - 0.05 * frame.y).normalize();
-    ShadingPoint { geometric_normal: n, shading_normal: shading, uv: Vec2::ZERO, attribute: Rgb::BLACK }
+    ShadingPoint {
+        geometric_normal: n,
+        shading_normal: shading,
+        uv: Vec2::ZERO,
+        tangent: Vec3::ZERO,
+        attribute: Rgb::BLACK,
+    }
 }
 
 fn direction_at(normal: Vec3, theta_degrees: f32, azimuth: f32) -> Vec3 {

@@ -6,6 +6,7 @@ use std::sync::Arc;
 use math::Vec2;
 use scene::desc::{TextureImage, UvTransform};
 use scene::material::Material;
+use scene::microfacet::Distribution;
 use scene::{FilterMode, Sampling, Texture, WrapMode};
 use spectrum::Rgb;
 
@@ -172,21 +173,15 @@ impl<'a> Loader<'a> {
         }
     }
 
-    /// GGX roughness `(alpha_u, alpha_v)`: `alpha`, or both `alpha_u` and `alpha_v`; default
-    /// 0.1, each a number or a texture (then [`Roughness::Textured`]). A Beckmann distribution
-    /// (Mitsuba's default) is approximated by GGX with the same alpha, with a warning.
-    fn roughness(&mut self, p: &Plugin<'a>, anisotropic: bool) -> Result<Roughness, SceneError> {
-        let distribution = p.string("distribution")?.map(str::to_ascii_lowercase);
-        match distribution.as_deref() {
-            Some("ggx") => {}
-            Some("beckmann") | None => self.warnings.push(format!(
-                "{}: {}: Beckmann microfacet distribution{} approximated by GGX with the same alpha",
-                p.node.pos.location(),
-                p.what(),
-                if distribution.is_none() { " (Mitsuba's default)" } else { "" }
-            )),
+    /// The microfacet `distribution` (Beckmann by default, as Mitsuba) and the roughness
+    /// `(alpha_u, alpha_v)`: `alpha`, or both `alpha_u` and `alpha_v`; default 0.1, each a
+    /// number or a texture (then [`Roughness::Textured`]).
+    fn roughness(&mut self, p: &Plugin<'a>, anisotropic: bool) -> Result<(Distribution, Roughness), SceneError> {
+        let distribution = match p.string("distribution")?.map(str::to_ascii_lowercase).as_deref() {
+            Some("ggx") => Distribution::Ggx,
+            Some("beckmann") | None => Distribution::Beckmann,
             Some(other) => return Err(p.error(format!("unknown microfacet distribution '{other}' (beckmann or ggx)"))),
-        }
+        };
         let check = |v: f64, name: &str| -> Result<f32, SceneError> {
             if v.is_finite() && v >= 0.0 {
                 Ok(v as f32)
@@ -209,13 +204,14 @@ impl<'a> Loader<'a> {
             &["alpha", "alpha"]
         };
         if names.iter().any(|n| textured(n)) {
-            let mut texture = |name: &str| self.texture_prop(p, name, 0.1, SpectrumUse::Unbounded);
+            let mut texture =
+                |name: &str| self.texture_prop(p, name, 0.1, SpectrumUse::Unbounded).map(float_evaluation);
             let alpha_u = texture(names[0])?;
             let alpha_v = if names[1] == names[0] { alpha_u.clone() } else { texture(names[1])? };
-            return Ok(Roughness::Textured(alpha_u, alpha_v));
+            return Ok((distribution, Roughness::Textured(alpha_u, alpha_v)));
         }
         let value = |name: &str| -> Result<f32, SceneError> { check(p.float(name)?.unwrap_or(0.1), name) };
-        Ok(Roughness::Constant(value(names[0])?, value(names[1])?))
+        Ok((distribution, Roughness::Constant(value(names[0])?, value(names[1])?)))
     }
 
     /// A texture-valued property: a nested `<texture>`, a `<ref name=… id=…>` to one, a
@@ -366,10 +362,11 @@ impl<'a> Loader<'a> {
                 };
                 let specular_reflectance = self.texture_prop(&p, "specular_reflectance", 1.0, reflectance)?;
                 if rough {
-                    let roughness = self.roughness(&p, true)?;
+                    let (distribution, roughness) = self.roughness(&p, true)?;
                     // Without a material Mitsuba uses eta = 0, k = 1: a Fresnel factor of 1.
                     let (eta, k) = ior.unwrap_or((Rgb::BLACK, Rgb::WHITE));
                     roughness.apply(|alpha_u, alpha_v| Material::RoughConductor {
+                        distribution,
                         alpha_u,
                         alpha_v,
                         eta,
@@ -404,14 +401,18 @@ impl<'a> Loader<'a> {
                     "thindielectric" => {
                         Material::ThinDielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance }
                     }
-                    _ => self.roughness(&p, true)?.apply(|alpha_u, alpha_v| Material::RoughDielectric {
-                        alpha_u,
-                        alpha_v,
-                        int_ior,
-                        ext_ior,
-                        specular_reflectance,
-                        specular_transmittance,
-                    }),
+                    _ => {
+                        let (distribution, roughness) = self.roughness(&p, true)?;
+                        roughness.apply(|alpha_u, alpha_v| Material::RoughDielectric {
+                            distribution,
+                            alpha_u,
+                            alpha_v,
+                            int_ior,
+                            ext_ior,
+                            specular_reflectance,
+                            specular_transmittance,
+                        })
+                    }
                 }
             }
             "plastic" | "roughplastic" => {
@@ -422,7 +423,9 @@ impl<'a> Loader<'a> {
                 if p.ty == "plastic" {
                     Material::Plastic { diffuse_reflectance, specular_reflectance, int_ior, ext_ior, nonlinear }
                 } else {
-                    self.roughness(&p, false)?.apply(|alpha, _| Material::RoughPlastic {
+                    let (distribution, roughness) = self.roughness(&p, false)?;
+                    roughness.apply(|alpha, _| Material::RoughPlastic {
+                        distribution,
                         alpha,
                         diffuse_reflectance,
                         specular_reflectance,
@@ -563,7 +566,19 @@ impl<'a> Loader<'a> {
     }
 }
 
-/// A rough material's GGX α: numbers, or textures evaluated at each hit.
+/// A texture as Mitsuba evaluates it as a float (`eval_1`, what roughness reads): a checkerboard
+/// there takes `color0` where the parities of `u` and `v` differ, the opposite of its colour
+/// evaluation (Mitsuba 2 and 3, "legacy scalar checkerboard convention"), so its colours swap.
+fn float_evaluation(texture: Texture) -> Texture {
+    match texture {
+        Texture::Checkerboard { color0, color1, to_uv } => {
+            Texture::Checkerboard { color0: color1, color1: color0, to_uv }
+        }
+        other => other,
+    }
+}
+
+/// A rough material's α: numbers, or textures evaluated at each hit.
 enum Roughness {
     /// `(α_u, α_v)`.
     Constant(f32, f32),

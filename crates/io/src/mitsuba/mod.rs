@@ -26,8 +26,6 @@
 //!   tabulated, constant or blackbody spectrum also keep it
 //!   ([`SceneDescription::emission_spectra`]) for spectral rendering;
 //! - `<bsdf type="fluorescent">` is our extension (see `bsdf.rs`);
-//! - Beckmann microfacet distributions (Mitsuba's default for the rough plugins) are
-//!   approximated by GGX with the same `alpha`, with a warning.
 //!
 //! Unknown elements, plugin types, missing required properties, wrong property types, bad
 //! numbers, undefined parameters and references, include cycles and missing files are errors

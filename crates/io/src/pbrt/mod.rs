@@ -68,6 +68,7 @@ use scene::desc::{
     SceneDescription, ShapeDesc, TextureImage, UvTransform,
 };
 use scene::material::Material;
+use scene::microfacet::Distribution;
 use scene::texture::{FilterMode, Sampling, Texture, WrapMode};
 use spectrum::Rgb;
 use spectrum::tabulated::Tabulated;
@@ -1083,7 +1084,14 @@ impl Builder {
                 let m = self.rough(
                     p,
                     || Material::Conductor { eta, k, specular_reflectance: smooth_reflectance },
-                    |alpha_u, alpha_v| Material::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance },
+                    |alpha_u, alpha_v| Material::RoughConductor {
+                        distribution: Distribution::Ggx,
+                        alpha_u,
+                        alpha_v,
+                        eta,
+                        k,
+                        specular_reflectance,
+                    },
                 )?;
                 two_sided(m)
             }
@@ -1124,6 +1132,7 @@ impl Builder {
                             dispersion: None,
                         },
                         |alpha_u, alpha_v| Material::RoughDielectric {
+                            distribution: Distribution::Ggx,
                             alpha_u,
                             alpha_v,
                             int_ior: eta,

@@ -80,6 +80,7 @@ pub fn trace_light_path<S: SpectralMode>(
                     normal: hit.normal,
                     shading_normal: hit.shading_normal,
                     uv: hit.uv,
+                    tangent: scene.material_is_anisotropic(hit.material).then_some(hit.tangent),
                     attribute: scene.material_reads_mesh_attribute(hit.material).then_some(hit.attribute),
                     fixed,
                     continuation: bsdf.continuation_probability(),

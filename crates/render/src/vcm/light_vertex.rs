@@ -25,7 +25,17 @@
 //!   ([`scene::Texture::MeshAttribute`]): a vertex whose material reads a mesh attribute (such a
 //!   material reads no uv texture in VCM, the driver checks) stores the attribute's three
 //!   channels rounded to the 21 most significant bits of their `f32` (sign, exponent and
-//!   12 mantissa bits: relative error ≤ 2⁻¹³ ≈ 1.2·10⁻⁴), others store uv exactly.
+//!   12 mantissa bits: relative error ≤ 2⁻¹³ ≈ 1.2·10⁻⁴), others store uv exactly;
+//! - a vertex whose material is anisotropic ([`Scene::material_is_anisotropic`]) needs its
+//!   surface tangent to rebuild the BSDF's frame: it stores the tangent's angle about the
+//!   (decoded) shading normal, measured from the `x` axis of [`math::Frame::from_z`], in 16
+//!   bits (error ≤ π/2¹⁶ ≈ 4.8·10⁻⁵ rad, plus the shading normal's 5·10⁻⁵ rad over the sine of
+//!   the angle between ∂p/∂u and the normal, about 1 for a mesh), in the low 8
+//!   mantissa bits of each of `u` and `v`, which are rounded to 16 mantissa bits for it
+//!   (relative error ≤ 2⁻¹⁶ ≈ 1.5·10⁻⁵). Isotropic materials keep the exact uv and no tangent,
+//!   so their vertices are unchanged; an anisotropic material that reads a mesh attribute has
+//!   no bits left for the tangent and is rebuilt in the frame of `Frame::from_z` (documented
+//!   deviation; no loader produces one).
 //!
 //! A [`LightVertex`] is its [`MergeRecord`] (what merging reads) plus normals and texture
 //! coordinates; the memory-efficient mode keeps only the records.
@@ -33,7 +43,7 @@
 //! Everything else (position, throughput, texture coordinates) is stored at full `f32`
 //! precision.
 
-use math::{Vec2, Vec3, octahedral};
+use math::{Frame, Vec2, Vec3, octahedral};
 use scene::{Bsdf, Scene, ShadingPoint, TransportMode};
 use spectrum::{Rgb, SpectralMode};
 
@@ -148,6 +158,9 @@ pub struct VertexData<S> {
     pub shading_normal: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// ∂p/∂u at the vertex when its material is anisotropic
+    /// ([`Scene::material_is_anisotropic`]), `None` otherwise.
+    pub tangent: Option<Vec3>,
     /// The mesh attribute value at the vertex when its material reads one
     /// ([`Scene::material_reads_mesh_attribute`]); it is then stored instead of `uv`.
     pub attribute: Option<Rgb>,
@@ -180,9 +193,10 @@ impl<S: SpectralMode> LightVertex<S> {
             material: data.material,
             normal: octahedral::encode(data.normal),
             shading_normal: octahedral::encode(data.shading_normal),
-            texture: match data.attribute {
-                Some(value) => pack_rgb(value),
-                None => [data.uv.x.to_bits(), data.uv.y.to_bits()],
+            texture: match (data.attribute, data.tangent) {
+                (Some(value), _) => pack_rgb(value),
+                (None, Some(tangent)) => pack_uv_angle(data.uv, tangent_angle(data.shading_normal, tangent)),
+                (None, None) => [data.uv.x.to_bits(), data.uv.y.to_bits()],
             },
         }
     }
@@ -193,7 +207,8 @@ impl<S: SpectralMode> LightVertex<S> {
         self.material
     }
 
-    /// Texture coordinates (meaningless when the material reads a mesh attribute).
+    /// Texture coordinates (meaningless when the material reads a mesh attribute; for an
+    /// anisotropic material within a relative 2⁻¹⁵ of the exact ones, see the module doc).
     #[inline]
     pub fn uv(&self) -> Vec2 {
         Vec2::new(f32::from_bits(self.texture[0]), f32::from_bits(self.texture[1]))
@@ -203,17 +218,17 @@ impl<S: SpectralMode> LightVertex<S> {
     #[inline]
     pub fn bsdf(&self, scene: &Scene, hero: Option<f32>) -> Option<Bsdf> {
         let material = self.material;
-        let (uv, attribute) = if scene.material_reads_mesh_attribute(material) {
-            (Vec2::ZERO, unpack_rgb(self.texture))
+        let shading_normal = octahedral::decode(self.shading_normal);
+        let (uv, attribute, tangent) = if scene.material_reads_mesh_attribute(material) {
+            (Vec2::ZERO, unpack_rgb(self.texture), Vec3::ZERO)
+        } else if scene.material_is_anisotropic(material) {
+            let (uv, angle) = unpack_uv_angle(self.texture);
+            (uv, Rgb::BLACK, tangent_from_angle(shading_normal, angle))
         } else {
-            (self.uv(), Rgb::BLACK)
+            (self.uv(), Rgb::BLACK, Vec3::ZERO)
         };
-        let point = ShadingPoint {
-            geometric_normal: octahedral::decode(self.normal),
-            shading_normal: octahedral::decode(self.shading_normal),
-            uv,
-            attribute,
-        };
+        let point =
+            ShadingPoint { geometric_normal: octahedral::decode(self.normal), shading_normal, uv, tangent, attribute };
         let material = &scene.materials[self.material as usize];
         Bsdf::new_at(material, &point, self.record.fixed(), TransportMode::Importance, hero)
     }
@@ -241,6 +256,44 @@ fn pack_continuation(probability: f32) -> u32 {
     let magnitude = probability.to_bits() & 0x7fff_ffff;
     // A carry into the exponent is correct rounding; 1.0 and 0.0 are exact.
     magnitude.saturating_add(1 << (CONTINUATION_DROPPED_BITS - 1)).min(0x7f80_0000) >> CONTINUATION_DROPPED_BITS
+}
+
+/// The angle of `tangent` about the shading normal `normal` as decoded from its octahedral
+/// code, from the `x` axis of `Frame::from_z` of that normal, as a fraction of a turn in
+/// 16 bits (0 when the tangent is parallel to the normal).
+#[inline]
+fn tangent_angle(normal: Vec3, tangent: Vec3) -> u16 {
+    let frame = Frame::from_z(octahedral::decode(octahedral::encode(normal)));
+    let angle = tangent.dot(frame.y).atan2(tangent.dot(frame.x));
+    let turns = if angle.is_finite() { angle / std::f32::consts::TAU } else { 0.0 };
+    ((turns * 65536.0).round() as i32).rem_euclid(65536) as u16
+}
+
+/// The unit tangent at `angle` (see [`tangent_angle`]) about the decoded shading normal.
+#[inline]
+fn tangent_from_angle(normal: Vec3, angle: u16) -> Vec3 {
+    let frame = Frame::from_z(normal);
+    let (sin, cos) = (angle as f32 * (std::f32::consts::TAU / 65536.0)).sin_cos();
+    frame.x * cos + frame.y * sin
+}
+
+/// `u` and `v` rounded to 16 mantissa bits, with the angle's high byte in the low 8 bits of
+/// `u` and its low byte in those of `v`.
+#[inline]
+fn pack_uv_angle(uv: Vec2, angle: u16) -> [u32; 2] {
+    let round = |x: f32| -> u32 {
+        let bits = x.to_bits();
+        let magnitude = (bits & 0x7fff_ffff).saturating_add(0x80).min(0x7f7f_ff00) & !0xff;
+        (bits & 0x8000_0000) | magnitude
+    };
+    [round(uv.x) | u32::from(angle >> 8), round(uv.y) | u32::from(angle & 0xff)]
+}
+
+/// The inverse of [`pack_uv_angle`] (up to its rounding).
+#[inline]
+fn unpack_uv_angle(texture: [u32; 2]) -> (Vec2, u16) {
+    let uv = Vec2::new(f32::from_bits(texture[0] & !0xff), f32::from_bits(texture[1] & !0xff));
+    (uv, ((texture[0] & 0xff) << 8 | (texture[1] & 0xff)) as u16)
 }
 
 /// Low bits dropped from each channel's `f32` by [`pack_rgb`].
@@ -413,6 +466,7 @@ mod tests {
             normal: Vec3::new(0.3, -0.4, 0.866).normalize(),
             shading_normal: Vec3::new(0.2, -0.5, 0.8).normalize(),
             uv: Vec2::new(0.1 * f, 12.5),
+            tangent: None,
             attribute: None,
             fixed: Vec3::new(-0.6, 0.0, 0.8),
             continuation: 0.75,
@@ -486,6 +540,41 @@ mod tests {
         assert!(worst <= 2f64.powi(-13), "relative error {worst}");
         assert!(worst > 2f64.powi(-14), "relative error {worst}");
         assert_eq!(unpack_rgb(pack_rgb(Rgb::new(0.0, 1.0, 0.5))), Rgb::new(0.0, 1.0, 0.5));
+    }
+
+    /// uv and a tangent angle share the texture words: uv within a relative 2⁻¹⁶, the tangent
+    /// within 1.5·10⁻⁴ rad of the exact one projected into the tangent plane of the shading
+    /// normal, for ∂p/∂u at least 45° from the normal (the angle's half step π/2¹⁶ plus the
+    /// normal's 5·10⁻⁵ rad over sin 45°); a coarser angle (8 bits) exceeds that bound.
+    #[test]
+    fn packed_tangent_angles_round_trip() {
+        let mut rng = math::Rng::for_stream(9, 0, 0);
+        let (mut worst_uv, mut worst_angle, mut worst_coarse) = (0.0f64, 0.0f32, 0.0f32);
+        for _ in 0..20_000 {
+            let normal = math::warp::uniform_sphere(rng.uniform2());
+            // ∂p/∂u at least 45° away from the normal (it is orthogonal to the geometric normal).
+            let frame = Frame::from_z(normal);
+            let phi = std::f32::consts::TAU * rng.uniform();
+            let along = frame.x * phi.cos() + frame.y * phi.sin() + normal * (2.0 * rng.uniform() - 1.0);
+            let tangent = along * (0.1 + 3.0 * rng.uniform());
+            let uv = Vec2::new(rng.uniform() * 4.0 - 1.0, rng.uniform() * 30.0);
+            let angle = tangent_angle(normal, tangent);
+            let (back_uv, back_angle) = unpack_uv_angle(pack_uv_angle(uv, angle));
+            assert_eq!(back_angle, angle);
+            for (a, b) in [(uv.x, back_uv.x), (uv.y, back_uv.y)] {
+                worst_uv = worst_uv.max(((f64::from(b) - f64::from(a)) / f64::from(a)).abs());
+            }
+            let decoded = octahedral::decode(octahedral::encode(normal));
+            let exact = (tangent - normal * normal.dot(tangent)).normalize();
+            let back = tangent_from_angle(decoded, angle);
+            assert!((back.length() - 1.0).abs() < 1e-5 && back.dot(decoded).abs() < 1e-5);
+            worst_angle = worst_angle.max(back.cross(exact).length());
+            let coarse = tangent_from_angle(decoded, angle & 0xff00);
+            worst_coarse = worst_coarse.max(coarse.cross(exact).length());
+        }
+        assert!(worst_uv <= 2f64.powi(-16), "uv relative error {worst_uv}");
+        assert!(worst_angle < 1.5e-4, "tangent error {worst_angle} rad");
+        assert!(worst_coarse > 1.5e-4, "8-bit angles: {worst_coarse} rad");
     }
 
     /// A stored vertex whose material reads a mesh attribute rebuilds the BSDF of the exact

@@ -9,6 +9,7 @@ use super::MAX_COMPONENTS;
 use super::principled::PrincipledParameters;
 use super::principled_thin::PrincipledThinParameters;
 use super::reference::ReferenceMaterial;
+use crate::microfacet::Distribution;
 use crate::texture::Texture;
 
 /// A material: the closed set of scattering models the renderer knows. Index-of-refraction
@@ -42,8 +43,10 @@ pub enum Material {
         /// Factor on the reflection.
         specular_reflectance: Texture,
     },
-    /// GGX microfacet conductor with visible-normal sampling.
+    /// Microfacet conductor with visible-normal sampling.
     RoughConductor {
+        /// GGX or Beckmann.
+        distribution: Distribution,
         /// Roughness along the tangent.
         alpha_u: f32,
         /// Roughness along the bitangent.
@@ -81,8 +84,10 @@ pub enum Material {
         /// Factor on transmission.
         specular_transmittance: Texture,
     },
-    /// GGX microfacet dielectric (Walter et al. 2007).
+    /// Microfacet dielectric (Walter et al. 2007).
     RoughDielectric {
+        /// GGX or Beckmann.
+        distribution: Distribution,
         /// Roughness along the tangent.
         alpha_u: f32,
         /// Roughness along the bitangent.
@@ -109,9 +114,11 @@ pub enum Material {
         /// Account for colour shifts from internal scattering (Mitsuba's `nonlinear`).
         nonlinear: bool,
     },
-    /// Diffuse base under a rough (GGX) dielectric coating (Mitsuba's `roughplastic`).
+    /// Diffuse base under a rough dielectric coating (Mitsuba's `roughplastic`).
     RoughPlastic {
-        /// Isotropic GGX roughness of the coating.
+        /// GGX or Beckmann.
+        distribution: Distribution,
+        /// Isotropic roughness of the coating.
         alpha: f32,
         /// Reflectance of the base.
         diffuse_reflectance: Texture,

@@ -22,6 +22,7 @@ use super::rough_dielectric::RoughDielectric;
 use super::rough_plastic::RoughPlastic;
 use super::shading::TransportMode;
 use super::thin_dielectric::ThinDielectric;
+use crate::microfacet::Microfacet;
 use crate::texture::TexturePoint;
 
 /// One leaf scattering model with its textures evaluated, in a local frame whose z axis is the
@@ -139,9 +140,10 @@ impl Model {
             Material::Conductor { eta, k, specular_reflectance } => {
                 Model::Conductor(Conductor { eta: *eta, k: *k, specular: specular_reflectance.eval_at(uv) })
             }
-            Material::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance } => {
+            Material::RoughConductor { distribution, alpha_u, alpha_v, eta, k, specular_reflectance } => {
                 let (alpha_u, alpha_v) = alpha.unwrap_or((*alpha_u, *alpha_v));
-                Model::RoughConductor(RoughConductor::new(alpha_u, alpha_v, *eta, *k, specular_reflectance.eval_at(uv)))
+                let dist = Microfacet::new(*distribution, alpha_u, alpha_v);
+                Model::RoughConductor(RoughConductor::new(dist, *eta, *k, specular_reflectance.eval_at(uv)))
             }
             Material::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance, dispersion } => {
                 Model::Dielectric(Dielectric::new(
@@ -162,6 +164,7 @@ impl Model {
                 ))
             }
             Material::RoughDielectric {
+                distribution,
                 alpha_u,
                 alpha_v,
                 int_ior,
@@ -169,8 +172,7 @@ impl Model {
                 specular_reflectance,
                 specular_transmittance,
             } => Model::RoughDielectric(RoughDielectric::new(
-                alpha.map_or(*alpha_u, |a| a.0),
-                alpha.map_or(*alpha_v, |a| a.1),
+                Microfacet::new(*distribution, alpha.map_or(*alpha_u, |a| a.0), alpha.map_or(*alpha_v, |a| a.1)),
                 *int_ior,
                 *ext_ior,
                 specular_reflectance.eval_at(uv),
@@ -186,6 +188,7 @@ impl Model {
                 ))
             }
             Material::RoughPlastic {
+                distribution,
                 alpha: alpha_plastic,
                 diffuse_reflectance,
                 specular_reflectance,
@@ -193,6 +196,7 @@ impl Model {
                 ext_ior,
                 nonlinear,
             } => Model::RoughPlastic(RoughPlastic::new(
+                *distribution,
                 alpha.map_or(*alpha_plastic, |a| a.0),
                 diffuse_reflectance.eval_at(uv),
                 specular_reflectance.eval_at(uv),

@@ -95,7 +95,7 @@ impl ModelBsdf {
             shading = -shading;
         }
         let flat = shading == geometric;
-        let frame = Frame::from_z(shading);
+        let frame = ShadingPoint::frame(shading, point.tangent);
         let cos_fixed_geometric = fixed.dot(geometric);
         let local_fixed = frame.to_local(fixed);
         if !consistent(cos_fixed_geometric, local_fixed.z) {

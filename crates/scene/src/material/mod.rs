@@ -29,14 +29,15 @@
 //! so that the radiance value for (a, b) equals the importance value for (b, a). Refraction
 //! carries `(η_fixed/η_generated)²` in radiance mode and not in importance mode. Diffuse,
 //! conductors and plastics are one-sided (black from behind, as in Mitsuba; wrap them in
-//! [`Material::TwoSided`]); the dielectrics work from both sides. The anisotropic GGX
-//! roughness is aligned with the tangent of `Frame::from_z(shading normal)` (shading points
-//! carry no surface tangent).
+//! [`Material::TwoSided`]); the dielectrics work from both sides. An anisotropic roughness's
+//! `alpha_u` lies along ∂p/∂u made orthogonal to the shading normal
+//! ([`ShadingPoint::tangent`], Mitsuba's shading frame); isotropic models use the frame of
+//! `Frame::from_z(shading normal)`. The rough models take a GGX or Beckmann distribution
+//! ([`crate::microfacet::Microfacet`]); the rough plastic weighs its base by the rough
+//! coating's transmittance and internal reflectance, tabulated by quadrature as Mitsuba does
+//! (`rough_coating`).
 //!
-//! Deviations from Mitsuba: the rough plastic uses the smooth Fresnel transmittance
-//! `1 − F(cos θ)` in place of Mitsuba's precomputed rough transmittance tables, and the smooth
-//! internal diffuse reflectance `Fdr(1/η)` in place of the rough one; the plastics'
-//! specular sampling weight uses the texture values at the hit instead of the textures' means;
+//! Deviations from Mitsuba: the plastics' specular sampling weight uses the texture values at the hit instead of the textures' means;
 //! a blend chooses its parts in proportion to blend weight × the luminance of the part's
 //! largest reflectance factor (Mitsuba: the blend weight alone).
 //!
@@ -47,11 +48,12 @@
 //! probability is the largest channel of the blended albedo, taken in `mixture`):
 //! `diffuse`, `diffuse_transmission`, `conductor`, `rough_conductor`, `dielectric`,
 //! `thin_dielectric`, `rough_dielectric`, `plastic`, `rough_plastic` (these two share
-//! `coating`), `principled` and `principled_thin` (sharing `disney`; the clearcoat lobe in
-//! `clearcoat`), and
+//! `coating`; the rough one's tables are in `rough_coating`), `principled` and
+//! `principled_thin` (sharing `disney`; the clearcoat lobe in `clearcoat`), and
 //! SmallVCM's `reference` material, which keeps its own BSDF. Shared helpers have their own
 //! files: `fresnel`, `lobe` (sample/evaluation records), `shading` (shading point,
-//! transport mode, side tests), GGX in [`crate::microfacet`]. `dispatch` holds the one closed
+//! transport mode, side tests, shading frame), GGX and Beckmann in [`crate::microfacet`].
+//! `dispatch` holds the one closed
 //! enum over the leaf models; `mixture` builds a BSDF from blends and two-sided wrappers;
 //! `bsdf` is the public per-hit [`Bsdf`]; `description` the [`Material`] enum loaders build.
 //!
@@ -88,6 +90,7 @@ mod principled;
 mod principled_thin;
 mod query;
 mod reference;
+mod rough_coating;
 mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;

@@ -23,7 +23,7 @@ use super::dispatch::LeafModel;
 use super::lobe::{ModelEval, Sampled};
 use super::query::LobeKind;
 use super::shading::TransportMode;
-use crate::microfacet::{Ggx, refract};
+use crate::microfacet::{Microfacet, refract};
 use crate::texture::{Texture, TexturePoint};
 
 /// The parameters of Mitsuba 3's `principled` BSDF, each a texture (scalar parameters read the
@@ -120,7 +120,7 @@ pub(super) struct Principled {
     bsdf: f32,
     clearcoat: Clearcoat,
     eta: f32,
-    ggx: Ggx,
+    ggx: Microfacet,
 }
 
 impl Principled {
@@ -142,7 +142,7 @@ impl Principled {
             bsdf: (1.0 - metallic) * spec_trans,
             clearcoat: Clearcoat::new(s(&p.clearcoat), s(&p.clearcoat_gloss)),
             eta: p.eta,
-            ggx: Ggx::new(alpha_u, alpha_v),
+            ggx: Microfacet::ggx(alpha_u, alpha_v),
         }
     }
 

@@ -20,7 +20,7 @@ use super::lobe::{ModelEval, Sampled};
 use super::principled::scalar;
 use super::query::LobeKind;
 use super::shading::TransportMode;
-use crate::microfacet::Ggx;
+use crate::microfacet::Microfacet;
 use crate::texture::{Texture, TexturePoint};
 
 /// The parameters of Mitsuba 3's `principledthin` BSDF, each a texture (scalar parameters read
@@ -101,9 +101,9 @@ pub(super) struct PrincipledThin {
     diff_trans: f32,
     eta: f32,
     /// Distribution of the reflection.
-    ggx: Ggx,
+    ggx: Microfacet,
     /// Distribution of the transmission (roughness scaled by `0.65·eta − 0.35`).
-    ggx_transmission: Ggx,
+    ggx_transmission: Microfacet,
 }
 
 impl PrincipledThin {
@@ -123,8 +123,8 @@ impl PrincipledThin {
             flatness: s(&p.flatness),
             diff_trans: 0.5 * s(&p.diff_trans),
             eta,
-            ggx: Ggx::new(alpha_u, alpha_v),
-            ggx_transmission: Ggx::new(scaled_u, scaled_v),
+            ggx: Microfacet::ggx(alpha_u, alpha_v),
+            ggx_transmission: Microfacet::ggx(scaled_u, scaled_v),
         }
     }
 

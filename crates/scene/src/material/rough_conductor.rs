@@ -1,4 +1,4 @@
-//! GGX microfacet conductor (Mitsuba's `roughconductor`) with visible-normal sampling:
+//! Microfacet conductor (Mitsuba's `roughconductor`, GGX or Beckmann) with visible-normal sampling:
 //! `f = F(ω_f·m) D(m) G(ω_f, ω_g) / (4 cos θ_f cos θ_g)`, forward pdf
 //! `G1(ω_f) D(m) / (4 cos θ_f)` per steradian (the visible-normal density times the reflection
 //! Jacobian `1/(4 ω·m)`).
@@ -10,13 +10,13 @@ use super::dispatch::LeafModel;
 use super::lobe::{ModelEval, Sampled, micro_reflect};
 use super::query::LobeKind;
 use super::shading::TransportMode;
-use crate::microfacet::{Ggx, fresnel_conductor_rgb};
+use crate::microfacet::{Microfacet, fresnel_conductor_rgb};
 
-/// GGX microfacet conductor.
+/// Microfacet conductor.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct RoughConductor {
     /// The microfacet distribution (anisotropic α along the frame's tangent and bitangent).
-    pub ggx: Ggx,
+    pub dist: Microfacet,
     /// Real part of the relative IOR per channel.
     pub eta: Rgb,
     /// Imaginary part per channel.
@@ -26,16 +26,16 @@ pub(super) struct RoughConductor {
 }
 
 impl RoughConductor {
-    /// The model with roughness `alpha_u` (tangent), `alpha_v` (bitangent).
-    pub(super) fn new(alpha_u: f32, alpha_v: f32, eta: Rgb, k: Rgb, specular: Rgb) -> Self {
-        RoughConductor { ggx: Ggx::new(alpha_u, alpha_v), eta, k, specular }
+    /// The model with the distribution `dist`.
+    pub(super) fn new(dist: Microfacet, eta: Rgb, k: Rgb, specular: Rgb) -> Self {
+        RoughConductor { dist, eta, k, specular }
     }
 }
 
-/// A visible-normal sample of `ggx` reflected about the sampled microfacet (a glossy lobe).
+/// A visible-normal sample of `dist` reflected about the sampled microfacet (a glossy lobe).
 #[inline]
-pub(super) fn sample_glossy(ggx: &Ggx, fixed: Vec3, u: [f32; 3]) -> Sampled {
-    let m = ggx.sample_visible(fixed, [u[0], u[1]]);
+pub(super) fn sample_glossy(dist: &Microfacet, fixed: Vec3, u: [f32; 3]) -> Sampled {
+    let m = dist.sample_visible(fixed, [u[0], u[1]]);
     Sampled::Lobe { direction: micro_reflect(fixed, m), lobe: LobeKind::Glossy }
 }
 
@@ -63,22 +63,22 @@ impl LeafModel for RoughConductor {
         if fixed.z <= 0.0 || generated.z <= 0.0 {
             return ModelEval::default();
         }
-        let ggx = &self.ggx;
+        let dist = &self.dist;
         let m = (fixed + generated).normalize();
-        let d = ggx.d(m);
+        let d = dist.d(m);
         if d <= 0.0 || !m.is_finite() {
             return ModelEval::default();
         }
         let f = fresnel_conductor_rgb(fixed.dot(m), self.eta, self.k);
-        let g = ggx.g(fixed, generated, m);
+        let g = dist.g(fixed, generated, m);
         ModelEval {
             value: self.specular * f * (d * g / (4.0 * fixed.z * generated.z)),
-            forward: p_fixed[0] * ggx.g1(fixed, m) * d / (4.0 * fixed.z),
-            reverse: p_generated[0] * ggx.g1(generated, m) * d / (4.0 * generated.z),
+            forward: p_fixed[0] * dist.g1_visible(fixed, m) * d / (4.0 * fixed.z),
+            reverse: p_generated[0] * dist.g1_visible(generated, m) * d / (4.0 * generated.z),
         }
     }
 
     fn sample(&self, fixed: Vec3, _lobe: usize, u: [f32; 3], _: TransportMode) -> Option<Sampled> {
-        Some(sample_glossy(&self.ggx, fixed, u))
+        Some(sample_glossy(&self.dist, fixed, u))
     }
 }

@@ -1,4 +1,4 @@
-//! GGX microfacet dielectric (Walter et al. 2007; Mitsuba's `roughdielectric`), two-sided,
+//! Microfacet dielectric (GGX or Beckmann; Walter et al. 2007; Mitsuba's `roughdielectric`), two-sided,
 //! with visible-normal sampling: the sampled microfacet's Fresnel term picks reflection or
 //! refraction. Both pdfs are solid-angle densities: the visible-normal density times the Fresnel
 //! choice times the Jacobian of the reflection (`1/(4 ω·m)`) or refraction map.
@@ -11,13 +11,13 @@ use super::fresnel::{fresnel_dielectric, relative_ior};
 use super::lobe::{ModelEval, Sampled, micro_reflect};
 use super::query::LobeKind;
 use super::shading::TransportMode;
-use crate::microfacet::{Ggx, refract};
+use crate::microfacet::{Microfacet, refract};
 
-/// GGX microfacet dielectric; `eta` = inside over outside.
+/// Microfacet dielectric; `eta` = inside over outside.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct RoughDielectric {
     /// The microfacet distribution.
-    pub ggx: Ggx,
+    pub dist: Microfacet,
     /// Relative IOR, inside over outside.
     pub eta: f32,
     /// Factor on reflection.
@@ -27,22 +27,10 @@ pub(super) struct RoughDielectric {
 }
 
 impl RoughDielectric {
-    /// The rough interface between `int_ior` (inside) and `ext_ior` with roughness `alpha_u`
-    /// (tangent), `alpha_v` (bitangent).
-    pub(super) fn new(
-        alpha_u: f32,
-        alpha_v: f32,
-        int_ior: f32,
-        ext_ior: f32,
-        reflectance: Rgb,
-        transmittance: Rgb,
-    ) -> Self {
-        RoughDielectric {
-            ggx: Ggx::new(alpha_u, alpha_v),
-            eta: relative_ior(int_ior, ext_ior),
-            reflectance,
-            transmittance,
-        }
+    /// The rough interface between `int_ior` (inside) and `ext_ior` with the distribution
+    /// `dist`.
+    pub(super) fn new(dist: Microfacet, int_ior: f32, ext_ior: f32, reflectance: Rgb, transmittance: Rgb) -> Self {
+        RoughDielectric { dist, eta: relative_ior(int_ior, ext_ior), reflectance, transmittance }
     }
 }
 
@@ -65,14 +53,14 @@ impl LeafModel for RoughDielectric {
     }
 
     fn evaluate(&self, fixed: Vec3, generated: Vec3, mode: TransportMode, _: [f32; 2], _: [f32; 2]) -> ModelEval {
-        rough_dielectric_evaluate(&self.ggx, self.eta, self.reflectance, self.transmittance, fixed, generated, mode)
+        rough_dielectric_evaluate(&self.dist, self.eta, self.reflectance, self.transmittance, fixed, generated, mode)
     }
 
     fn sample(&self, fixed: Vec3, _lobe: usize, u: [f32; 3], _: TransportMode) -> Option<Sampled> {
         // Work with the fixed direction on the +z side; `e` = η far side / η near side.
         let (side, e) = if fixed.z > 0.0 { (1.0, self.eta) } else { (-1.0, 1.0 / self.eta) };
         let up = Vec3::new(fixed.x, fixed.y, fixed.z * side);
-        let m = self.ggx.sample_visible(up, [u[0], u[1]]);
+        let m = self.dist.sample_visible(up, [u[0], u[1]]);
         let cos_m = up.dot(m);
         if cos_m <= 0.0 {
             return None;
@@ -95,7 +83,7 @@ impl LeafModel for RoughDielectric {
 /// The rough dielectric (Walter et al. 2007, with visible-normal sampling) for local
 /// directions on either side.
 fn rough_dielectric_evaluate(
-    ggx: &Ggx,
+    dist: &Microfacet,
     eta: f32,
     reflectance: Rgb,
     transmittance: Rgb,
@@ -110,11 +98,11 @@ fn rough_dielectric_evaluate(
     let (side, e) = if fixed.z > 0.0 { (1.0, eta) } else { (-1.0, 1.0 / eta) };
     let flip = |v: Vec3| Vec3::new(v.x, v.y, v.z * side);
     let (a, b) = (flip(fixed), flip(generated));
-    let Some(h) = RoughPair::new(ggx, a, b, e) else { return ModelEval::default() };
+    let Some(h) = RoughPair::new(dist, a, b, e) else { return ModelEval::default() };
     let value = if h.reflection {
-        reflectance * (h.fresnel * h.d * ggx.g(a, b, h.m) / (4.0 * a.z * b.z.abs()))
+        reflectance * (h.fresnel * h.d * dist.g(a, b, h.m) / (4.0 * a.z * b.z.abs()))
     } else {
-        let core = (h.cos_a * h.cos_b).abs() * (1.0 - h.fresnel) * h.d * ggx.g(a, b, h.m)
+        let core = (h.cos_a * h.cos_b).abs() * (1.0 - h.fresnel) * h.d * dist.g(a, b, h.m)
             / ((a.z * b.z).abs() * sqr(h.cos_a + e * h.cos_b));
         // Radiance: f_s(fixed → generated) ∝ η_fixed²; importance: the adjoint, ∝ η_generated².
         match mode {
@@ -122,12 +110,12 @@ fn rough_dielectric_evaluate(
             TransportMode::Importance => transmittance * (core * sqr(e)),
         }
     };
-    let forward = h.density(ggx, a, e);
+    let forward = h.density(dist, a, e);
     // The reverse density: the same pair seen from the generated side.
     let (side_b, e_b) = if generated.z > 0.0 { (1.0, eta) } else { (-1.0, 1.0 / eta) };
     let flip_b = |v: Vec3| Vec3::new(v.x, v.y, v.z * side_b);
-    let reverse = RoughPair::new(ggx, flip_b(generated), flip_b(fixed), e_b)
-        .map_or(0.0, |r| r.density(ggx, flip_b(generated), e_b));
+    let reverse = RoughPair::new(dist, flip_b(generated), flip_b(fixed), e_b)
+        .map_or(0.0, |r| r.density(dist, flip_b(generated), e_b));
     ModelEval { value, forward, reverse }
 }
 
@@ -144,7 +132,7 @@ struct RoughPair {
 }
 
 impl RoughPair {
-    fn new(ggx: &Ggx, a: Vec3, b: Vec3, e: f32) -> Option<RoughPair> {
+    fn new(dist: &Microfacet, a: Vec3, b: Vec3, e: f32) -> Option<RoughPair> {
         let reflection = b.z > 0.0;
         let sum = if reflection { a + b } else { a + e * b };
         let m = sum.normalize();
@@ -157,7 +145,7 @@ impl RoughPair {
         if cos_a <= 0.0 || cos_b * b.z <= 0.0 {
             return None;
         }
-        let d = ggx.d(m);
+        let d = dist.d(m);
         if d <= 0.0 {
             return None;
         }
@@ -166,8 +154,8 @@ impl RoughPair {
 
     /// Density of sampling `b` from `a`: the visible-normal density times the Fresnel choice
     /// times the Jacobian of the reflection or refraction map.
-    fn density(&self, ggx: &Ggx, a: Vec3, e: f32) -> f32 {
-        let visible = ggx.g1(a, self.m) * self.cos_a * self.d / a.z;
+    fn density(&self, dist: &Microfacet, a: Vec3, e: f32) -> f32 {
+        let visible = dist.g1_visible(a, self.m) * self.cos_a * self.d / a.z;
         if self.reflection {
             self.fresnel * visible / (4.0 * self.cos_a)
         } else {

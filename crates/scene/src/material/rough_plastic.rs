@@ -1,8 +1,8 @@
-//! Rough plastic (Mitsuba's `roughplastic`), one-sided: a GGX reflection of the coating
+//! Rough plastic (Mitsuba's `roughplastic`), one-sided: a microfacet reflection of the coating
 //! (lobe 0, pdf `G1(ω_f) D(m)/(4 cos θ_f)` per steradian) over the coated diffuse base (lobe 1,
-//! `cos θ/π` per steradian), each pdf scaled by the lobe's selection probability.
-//! Deviation from Mitsuba: the smooth Fresnel transmittance and internal reflectance stand in
-//! for Mitsuba's precomputed rough tables.
+//! `cos θ/π` per steradian), each pdf scaled by the lobe's selection probability. The base is
+//! weighed by the rough coating's transmittance and internal reflectance
+//! ([`super::rough_coating`]), as in Mitsuba.
 
 use math::Vec3;
 use spectrum::Rgb;
@@ -10,27 +10,38 @@ use spectrum::Rgb;
 use super::coating::Coating;
 use super::diffuse::sample_cosine;
 use super::dispatch::LeafModel;
-use super::fresnel::fresnel_dielectric;
+use super::fresnel::{fresnel_dielectric, relative_ior};
 use super::lobe::{ModelEval, Sampled};
+use super::rough_coating::coating_table;
 use super::rough_conductor::sample_glossy;
 use super::shading::TransportMode;
-use crate::microfacet::Ggx;
+use crate::microfacet::{Distribution, Microfacet};
 
 /// GGX coating over a diffuse base.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct RoughPlastic {
     /// The coating's (isotropic) microfacet distribution.
-    pub ggx: Ggx,
+    pub dist: Microfacet,
     /// The coating and the base.
     pub coating: Coating,
 }
 
 impl RoughPlastic {
-    /// See [`Coating::new`]; `alpha` is the coating's GGX roughness.
-    pub(super) fn new(alpha: f32, diffuse: Rgb, specular: Rgb, int_ior: f32, ext_ior: f32, nonlinear: bool) -> Self {
+    /// The coating of index `int_ior` (outside `ext_ior`) with the isotropic roughness `alpha`
+    /// over the base reflectance `diffuse` (see [`Coating`]).
+    pub(super) fn new(
+        distribution: Distribution,
+        alpha: f32,
+        diffuse: Rgb,
+        specular: Rgb,
+        int_ior: f32,
+        ext_ior: f32,
+        nonlinear: bool,
+    ) -> Self {
+        let eta = relative_ior(int_ior, ext_ior);
         RoughPlastic {
-            ggx: Ggx::new(alpha, alpha),
-            coating: Coating::new(diffuse, specular, int_ior, ext_ior, nonlinear),
+            dist: Microfacet::new(distribution, alpha, alpha),
+            coating: Coating::rough(diffuse, specular, eta, nonlinear, coating_table(distribution, alpha, eta)),
         }
     }
 }
@@ -63,21 +74,21 @@ impl LeafModel for RoughPlastic {
         if fixed.z <= 0.0 || generated.z <= 0.0 {
             return ModelEval::default();
         }
-        let (ggx, c) = (&self.ggx, &self.coating);
+        let (dist, c) = (&self.dist, &self.coating);
         let mut e = c.diffuse_eval(fixed, generated, p_fixed, p_generated);
         let m = (fixed + generated).normalize();
-        let d = ggx.d(m);
+        let d = dist.d(m);
         if d > 0.0 && m.is_finite() {
             let f = fresnel_dielectric(fixed.dot(m), c.eta);
-            let g = ggx.g(fixed, generated, m);
+            let g = dist.g(fixed, generated, m);
             e.value += c.specular * (f * d * g / (4.0 * fixed.z * generated.z));
-            e.forward += p_fixed[0] * ggx.g1(fixed, m) * d / (4.0 * fixed.z);
-            e.reverse += p_generated[0] * ggx.g1(generated, m) * d / (4.0 * generated.z);
+            e.forward += p_fixed[0] * dist.g1_visible(fixed, m) * d / (4.0 * fixed.z);
+            e.reverse += p_generated[0] * dist.g1_visible(generated, m) * d / (4.0 * generated.z);
         }
         e
     }
 
     fn sample(&self, fixed: Vec3, lobe: usize, u: [f32; 3], _: TransportMode) -> Option<Sampled> {
-        Some(if lobe == 0 { sample_glossy(&self.ggx, fixed, u) } else { sample_cosine(u) })
+        Some(if lobe == 0 { sample_glossy(&self.dist, fixed, u) } else { sample_cosine(u) })
     }
 }

@@ -1,7 +1,7 @@
 //! The local geometry a BSDF is built on, the transport mode, and the side tests shared by
 //! every model oriented by a shading normal.
 
-use math::{COSINE_EPSILON, Vec2, Vec3};
+use math::{COSINE_EPSILON, Frame, Vec2, Vec3};
 use spectrum::Rgb;
 
 /// The local geometry at a surface point that a BSDF needs.
@@ -15,16 +15,42 @@ pub struct ShadingPoint {
     pub shading_normal: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// Unit surface tangent along which an anisotropic roughness's `alpha_u` lies: ∂p/∂u made
+    /// orthogonal to the shading normal (Mitsuba's shading frame, see [`crate::tangent`]).
+    /// [`Vec3::ZERO`] when the material is isotropic (or ∂p/∂u is degenerate): the BSDF then
+    /// uses the frame of [`math::Frame::from_z`] about the shading normal.
+    pub tangent: Vec3,
     /// The value of the mesh attribute the material reads ([`crate::Texture::MeshAttribute`])
     /// at the point; black when the material reads none.
     pub attribute: Rgb,
 }
 
 impl ShadingPoint {
-    /// A point whose shading normal is its geometric normal, at uv (0, 0), without a mesh
-    /// attribute.
+    /// A point whose shading normal is its geometric normal, at uv (0, 0), without a tangent
+    /// or a mesh attribute.
     pub fn flat(normal: Vec3) -> Self {
-        Self { geometric_normal: normal, shading_normal: normal, uv: Vec2::ZERO, attribute: Rgb::BLACK }
+        Self {
+            geometric_normal: normal,
+            shading_normal: normal,
+            uv: Vec2::ZERO,
+            tangent: Vec3::ZERO,
+            attribute: Rgb::BLACK,
+        }
+    }
+
+    /// The shading frame: `z` the unit shading normal `n`, `x` the tangent made orthogonal to
+    /// `n` (Gram–Schmidt), `y = n × x`; [`Frame::from_z`] when the tangent is zero or parallel
+    /// to `n`.
+    #[inline]
+    pub fn frame(n: Vec3, tangent: Vec3) -> Frame {
+        if tangent == Vec3::ZERO {
+            return Frame::from_z(n);
+        }
+        let s = (tangent - n * n.dot(tangent)).normalize_or_zero();
+        if s == Vec3::ZERO || !s.is_finite() {
+            return Frame::from_z(n);
+        }
+        Frame { x: s, y: n.cross(s), z: n }
     }
 }
 

@@ -1,65 +1,108 @@
-//! Microfacet building blocks of the rough BSDFs: the anisotropic GGX (Trowbridge–Reitz)
-//! distribution of normals, its Smith masking function, sampling of the distribution of
-//! *visible* normals (Heitz 2018, "Sampling the GGX Distribution of Visible Normals", JCGT 7(4))
-//! with its density, refraction through a microfacet, and Fresnel reflectances of conductors
-//! (complex index of refraction) and of the diffuse (hemispherically averaged) dielectric case.
+//! Microfacet building blocks of the rough BSDFs: the anisotropic GGX (Trowbridge–Reitz) and
+//! Beckmann distributions of normals ([`Microfacet`], one value every rough model holds; the
+//! models never match on the kind), their Smith masking, sampling of the distribution of
+//! *visible* normals with its density, refraction through a microfacet, and Fresnel
+//! reflectances of conductors (complex index of refraction) and of the diffuse (hemispherically
+//! averaged) dielectric case.
 //!
 //! Every direction here is in the local frame of the macro surface: `z` is the (shading) normal,
 //! `x` the tangent along which the roughness is `alpha_x`. Densities are per unit solid angle.
 
-use math::{INV_PI, PI, Vec3, sqr};
+mod beckmann;
+mod erf;
+mod ggx;
+
+use math::{Vec3, sqr};
 use spectrum::Rgb;
 
 /// Smallest roughness accepted: below it the distribution is too peaked for single precision
 /// (Mitsuba uses the same bound).
 pub const MIN_ALPHA: f32 = 1e-4;
 
-/// Anisotropic GGX distribution of microfacet normals.
+/// The shape of a microfacet normal distribution (Mitsuba's `distribution` parameter).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Distribution {
+    /// Trowbridge–Reitz: long tails; pbrt-v4's only distribution.
+    #[default]
+    Ggx,
+    /// Beckmann (Gaussian slopes): Mitsuba's default for the rough plugins.
+    Beckmann,
+}
+
+/// An anisotropic microfacet distribution of normals.
 ///
-/// `D(m) = 1 / (π αx αy (mx²/αx² + my²/αy² + mz²)²)` for unit `m` above the macro surface and 0
-/// below; it is normalised so that `∫ D(m) cos θm dω(m) = 1` (projected area of the
-/// microsurface equals that of the macro surface).
+/// `D(m)` is normalised so that `∫ D(m) cos θm dω(m) = 1` (the projected area of the
+/// microsurface equals that of the macro surface):
+/// - GGX: `D(m) = 1 / (π αx αy (mx²/αx² + my²/αy² + mz²)²)`,
+/// - Beckmann: `D(m) = exp(−(mx²/αx² + my²/αy²)/mz²) / (π αx αy mz⁴)`,
+///
+/// both 0 for `m` below the macro surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ggx {
+pub struct Microfacet {
+    /// GGX or Beckmann.
+    pub kind: Distribution,
     /// Roughness along the local `x` axis (tangent), at least [`MIN_ALPHA`].
     pub alpha_x: f32,
     /// Roughness along the local `y` axis (bitangent), at least [`MIN_ALPHA`].
     pub alpha_y: f32,
 }
 
-impl Ggx {
-    /// A distribution with roughness `alpha_x` along the tangent and `alpha_y` along the
-    /// bitangent (GGX `α`, i.e. Disney `roughness²`). Non-finite or tiny values are raised to
-    /// [`MIN_ALPHA`].
-    pub fn new(alpha_x: f32, alpha_y: f32) -> Self {
+impl Microfacet {
+    /// A distribution of kind `kind` with roughness `alpha_x` along the tangent and `alpha_y`
+    /// along the bitangent (`α`, i.e. Disney `roughness²`, the RMS slope √2·σ for Beckmann).
+    /// Non-finite or tiny values are raised to [`MIN_ALPHA`].
+    pub fn new(kind: Distribution, alpha_x: f32, alpha_y: f32) -> Self {
         let clamp = |a: f32| if a.is_finite() { a.max(MIN_ALPHA) } else { MIN_ALPHA };
-        Self { alpha_x: clamp(alpha_x), alpha_y: clamp(alpha_y) }
+        Self { kind, alpha_x: clamp(alpha_x), alpha_y: clamp(alpha_y) }
+    }
+
+    /// A GGX distribution (see [`Microfacet::new`]).
+    pub fn ggx(alpha_x: f32, alpha_y: f32) -> Self {
+        Self::new(Distribution::Ggx, alpha_x, alpha_y)
+    }
+
+    /// A Beckmann distribution (see [`Microfacet::new`]).
+    pub fn beckmann(alpha_x: f32, alpha_y: f32) -> Self {
+        Self::new(Distribution::Beckmann, alpha_x, alpha_y)
     }
 
     /// Density of microfacet normals `D(m)` per unit solid angle of `m` (not a probability
     /// density: `D(m) cos θm` is). Zero for `m` below the macro surface.
     #[inline]
     pub fn d(&self, m: Vec3) -> f32 {
-        if m.z <= 0.0 {
-            return 0.0;
+        match self.kind {
+            Distribution::Ggx => ggx::d(self.alpha_x, self.alpha_y, m),
+            Distribution::Beckmann => beckmann::d(self.alpha_x, self.alpha_y, m),
         }
-        let t = sqr(m.x / self.alpha_x) + sqr(m.y / self.alpha_y) + sqr(m.z);
-        let value = INV_PI / (self.alpha_x * self.alpha_y * sqr(t));
-        if value.is_finite() { value } else { 0.0 }
     }
 
-    /// Smith's masking function `G1(w, m) = 1 / (1 + Λ(w))` for the direction `w` (either
-    /// hemisphere), 0 when `w` sees the back of the microfacet `m` (`(w·m)(w·n) ≤ 0`).
+    /// Smith's masking function `G1(w, m) = 1 / (1 + Λ(w))` used in BSDF values, for the
+    /// direction `w` (either hemisphere); 0 when `w` sees the back of the microfacet `m`
+    /// (`(w·m)(w·n) ≤ 0`). GGX: exact; Beckmann: Mitsuba's rational fit (below 0.35 % from
+    /// [`Microfacet::g1_visible`]).
     #[inline]
     pub fn g1(&self, w: Vec3, m: Vec3) -> f32 {
         if w.dot(m) * w.z <= 0.0 {
             return 0.0;
         }
-        // 1/(1 + Λ) with Λ = (√(1 + a²/cos²) − 1)/2, written as 2|cos|/(|cos| + √(cos² + a²)),
-        // which stays finite at the horizon.
-        let a2 = sqr(self.alpha_x * w.x) + sqr(self.alpha_y * w.y);
-        let c = w.z.abs();
-        2.0 * c / (c + (sqr(c) + a2).sqrt())
+        match self.kind {
+            Distribution::Ggx => ggx::g1(self.alpha_x, self.alpha_y, w),
+            Distribution::Beckmann => beckmann::g1(self.alpha_x, self.alpha_y, w),
+        }
+    }
+
+    /// The exact Smith masking `G1(w, m)` that normalises the visible-normal density of
+    /// [`Microfacet::sample_visible`]: `visible_pdf = g1_visible · max(0, w·m) · D(m) / cos θw`.
+    /// Equal to [`Microfacet::g1`] for GGX.
+    #[inline]
+    pub fn g1_visible(&self, w: Vec3, m: Vec3) -> f32 {
+        if w.dot(m) * w.z <= 0.0 {
+            return 0.0;
+        }
+        match self.kind {
+            Distribution::Ggx => ggx::g1(self.alpha_x, self.alpha_y, w),
+            Distribution::Beckmann => beckmann::g1_exact(self.alpha_x, self.alpha_y, w),
+        }
     }
 
     /// Separable Smith shadowing-masking `G(a, b, m) = G1(a, m) · G1(b, m)` (Mitsuba's choice).
@@ -70,38 +113,34 @@ impl Ggx {
 
     /// Samples a microfacet normal from the distribution of normals visible from `w`
     /// (`w.z > 0`), `D_w(m) = G1(w, m) max(0, w·m) D(m) / cos θw`, with two uniform numbers
-    /// (Heitz 2018). The density per unit solid angle of `m` is [`Ggx::visible_pdf`].
+    /// (GGX: Heitz 2018; Beckmann: Heitz & d'Eon 2014). Its density per unit solid angle of `m`
+    /// is [`Microfacet::visible_pdf`].
+    #[inline]
     pub fn sample_visible(&self, w: Vec3, u: [f32; 2]) -> Vec3 {
-        // Stretch the view direction to the configuration of the hemisphere (α = 1).
-        let vh = Vec3::new(self.alpha_x * w.x, self.alpha_y * w.y, w.z).normalize();
-        // Orthonormal basis around vh (T1 horizontal).
-        let len2 = sqr(vh.x) + sqr(vh.y);
-        let t1 = if len2 > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt() } else { Vec3::X };
-        let t2 = vh.cross(t1);
-        // A point on the projected disc: a uniform disc whose lower half is squashed by the
-        // projection of the hemisphere.
-        let r = u[0].sqrt();
-        let phi = 2.0 * PI * u[1];
-        let p1 = r * phi.cos();
-        let s = 0.5 * (1.0 + vh.z);
-        let p2 = (1.0 - s) * (1.0 - sqr(p1)).max(0.0).sqrt() + s * r * phi.sin();
-        let p3 = (1.0 - sqr(p1) - sqr(p2)).max(0.0).sqrt();
-        let nh = p1 * t1 + p2 * t2 + p3 * vh;
-        // Unstretch.
-        Vec3::new(self.alpha_x * nh.x, self.alpha_y * nh.y, nh.z.max(0.0)).normalize()
+        match self.kind {
+            Distribution::Ggx => ggx::sample_visible(self.alpha_x, self.alpha_y, w, u),
+            Distribution::Beckmann => beckmann::sample_visible(self.alpha_x, self.alpha_y, w, u),
+        }
     }
 
-    /// Density per unit solid angle of [`Ggx::sample_visible`] producing `m` for the direction
-    /// `w` (`w.z > 0`).
+    /// Density per unit solid angle of [`Microfacet::sample_visible`] producing `m` for the
+    /// direction `w` (`w.z > 0`).
     #[inline]
     pub fn visible_pdf(&self, w: Vec3, m: Vec3) -> f32 {
         if w.z <= 0.0 {
             return 0.0;
         }
-        self.g1(w, m) * w.dot(m).max(0.0) * self.d(m) / w.z
+        self.g1_visible(w, m) * w.dot(m).max(0.0) * self.d(m) / w.z
+    }
+
+    /// Density per unit solid angle of the direction reflected about a visible normal sampled
+    /// for `w` (`w.z > 0`) when the reflection is about `m`: the visible-normal density times
+    /// the Jacobian `1/(4 w·m)`, i.e. `G1(w, m) D(m) / (4 cos θw)`.
+    #[inline]
+    pub fn reflection_pdf(&self, w: Vec3, m: Vec3) -> f32 {
+        self.g1_visible(w, m) * self.d(m) / (4.0 * w.z)
     }
 }
-
 /// Reflection of `w` about the unit vector `m` (both pointing away from the surface).
 #[inline]
 pub fn reflect(w: Vec3, m: Vec3) -> Vec3 {
