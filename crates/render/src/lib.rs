@@ -6,6 +6,7 @@
 //! * [`vcm`]: the VCM engine (light tracing, PPM, BPM, BPT, VCM).
 //! * [`fluorescent`]: wavelength shifts at fluorescent vertices, shared by all integrators.
 //! * [`hash_grid`]: the range search for vertex merging.
+//! * [`splat_frame`]: camera samples splatted over the pixels their filter reaches.
 //! * [`driver`]: iterations or a time budget, threads, determinism, progress.
 
 pub mod driver;
@@ -13,6 +14,7 @@ pub mod eye_light;
 pub mod fluorescent;
 pub mod hash_grid;
 pub mod path_tracer;
+pub mod splat_frame;
 pub mod vcm;
 
 pub use driver::{Algorithm, RenderOutput, RenderSettings, render};

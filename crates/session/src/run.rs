@@ -7,6 +7,7 @@ use render::driver::{Budget, Control, RenderOutput};
 use render::vcm::Family;
 use render::vcm::technique_images::TechniqueLayout;
 use render::{Algorithm, RenderSettings};
+use scene::filter::FilmMode;
 
 use crate::checkpoint::{self, Recorded};
 use crate::guard::{self, Guard};
@@ -60,6 +61,17 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
             request.spectral = recorded.spectral;
             request.russian_roulette = recorded.russian_roulette;
             request.heuristic = recorded.heuristic;
+            let mode = FilmMode::from_name(&recorded.film)
+                .ok_or_else(|| anyhow::anyhow!("unknown film mode '{}' in '{}'", recorded.film, path.display()))?;
+            if let Some(asked) = request.film.filter(|asked| *asked != mode) {
+                bail!(
+                    "cannot resume '{}' with --film {}: it was rendered with --film {}",
+                    path.display(),
+                    asked.name(),
+                    mode.name()
+                );
+            }
+            request.film = Some(mode);
             if request.checkpoint.is_none() {
                 request.checkpoint = Some(path.clone());
             }
@@ -103,7 +115,7 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
     if let Some(line) = &loaded.loaded {
         observer.notice(Notice::Progress(line.clone()));
     }
-    let LoadedScene { scene, file_max_length, file_samples, fingerprint, .. } = loaded;
+    let LoadedScene { mut scene, file_max_length, file_samples, fingerprint, .. } = loaded;
     if let Some((_, recorded, path)) = &resumed
         && let Some(difference) = fingerprint.difference(recorded)
     {
@@ -112,6 +124,9 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
              scene, or start a new render)",
             path.display()
         );
+    }
+    if let Some(film) = r.film {
+        scene.camera.film = film;
     }
     let mut settings = RenderSettings {
         algorithm: r.algorithm,
@@ -156,6 +171,7 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
         spectral: r.spectral,
         russian_roulette: r.russian_roulette,
         heuristic: r.heuristic,
+        film: scene.camera.film.name().to_string(),
         fingerprint,
     };
 
