@@ -308,3 +308,39 @@ fn technique_images_and_families_sum_to_the_splatted_frame() {
         }
     }
 }
+
+/// Mean over pixels and channels of the per-pixel variance of the mean after `iterations`.
+fn mean_variance(scene: &Scene, algorithm: &str, iterations: u64) -> f64 {
+    let s = RenderSettings { budget: Budget::Iterations(iterations), ..settings(algorithm, 9) };
+    let film = render(scene, &s).unwrap().film;
+    let variance = film.variance_of_mean();
+    variance.iter().map(|v| v.iter().map(|c| *c as f64).sum::<f64>()).sum::<f64>() / (3.0 * variance.len() as f64)
+}
+
+/// The measurement behind docs/film.md's variance table: per-pixel variance at equal sample
+/// counts, FIS over splat, on the four built-in scenes (128², 64 iterations) with the path
+/// tracer. The box must
+/// give exactly 1 (the same image); the other ratios are printed.
+#[test]
+#[ignore = "slow: measurement for docs/film.md (cargo test -p render --test film -- --ignored --nocapture)"]
+fn measure_variance_splat_against_fis() {
+    let filters = [("box", Filter::Box), ("tent r=1.5", tent(1.5)), ("gaussian σ=0.5 r=2", gaussian(0.5, 2.0))];
+    for (mask, scene_name) in cornell::BUILTIN_SCENES.map(|s| (s.mask, s.name)) {
+        for (name, filter) in filters {
+            let scene = |film| {
+                let mut scene = cornell::build(mask, 128, 128).unwrap();
+                scene.camera = scene.camera.with_filter(filter).with_film(film);
+                scene
+            };
+            let fis = mean_variance(&scene(FilmMode::Fis), "pt", 64);
+            let splat = mean_variance(&scene(FilmMode::Splat), "pt", 64);
+            eprintln!(
+                "{scene_name}, {name}: mean variance fis {fis:.4e}, splat {splat:.4e}, fis/splat {:.3}",
+                fis / splat
+            );
+            if filter.is_box() {
+                assert_eq!(fis, splat, "the box filter must give the same image in both modes");
+            }
+        }
+    }
+}
