@@ -21,6 +21,7 @@ use common::{BlockEstimate, block_estimate, settings};
 use math::{Rng, Vec2, Vec3};
 use render::RenderSettings;
 use render::driver::{Budget, Renderer, render};
+use render::vcm::RadiusMode;
 use render::vcm::technique_images::TechniqueLayout;
 use scene::desc::FilterDesc;
 use scene::filter::FilmMode;
@@ -238,6 +239,27 @@ fn light_tracing_agrees_with_the_path_tracer_when_splatting() {
     eprintln!("lt vs pt, splat: {outcome}; lt × 1.05: {scaled}");
     assert!(outcome.passed, "light tracing and the path tracer disagree when splatting: {outcome}");
     assert!(!scaled.passed, "no power to see a 5 % error: {scaled}");
+}
+
+#[test]
+fn a_per_pixel_radius_splats_like_the_global_one_without_merging() {
+    // Splatting with a per-pixel radius, a light-tracing splat takes the constants of the pixel
+    // containing its raster point; without merging BPT's weights do not depend on the radius,
+    // so the image must be the global radius' up to rounding.
+    let scene = cornell_with(gaussian(0.5, 2.0), FilmMode::Splat, 32);
+    let run = |radius_mode| {
+        let s = RenderSettings { budget: Budget::Iterations(2), radius_mode, ..settings("bpt", 5) };
+        render(&scene, &s).unwrap().film.mean()
+    };
+    let (global, per_pixel) = (run(RadiusMode::Global), run(RadiusMode::PerPixel));
+    let mut largest = 0.0f32;
+    for (a, b) in global.iter().zip(&per_pixel) {
+        for c in 0..3 {
+            largest = largest.max((a[c] - b[c]).abs() / a[c].abs().max(1e-3));
+        }
+    }
+    assert!(largest < 1e-4, "largest relative difference {largest}");
+    assert!(global.iter().any(|p| p[0] > 0.0));
 }
 
 fn film_bits(scene: &Scene, settings: &RenderSettings) -> Vec<u64> {
