@@ -20,6 +20,7 @@ use render::Algorithm;
 use render::driver::Budget;
 use render::vcm::RadiusMode;
 use scene::cornell;
+use scene::filter::FilmMode;
 use session::{LoadedScene, Notice, SceneSource};
 // The per-entry Z-test of `compare` and `conformance`.
 use image_metrics::ztest;
@@ -143,6 +144,12 @@ struct RenderArgs {
     /// MIS heuristic of the path tracer (pt): balance or power (exponent 2).
     #[arg(long, default_value = "balance", value_name = "balance|power", value_parser = parse_heuristic)]
     heuristic: Heuristic,
+    /// How camera samples reach the pixels: `splat` spreads each over the pixels its
+    /// reconstruction filter covers (Mitsuba's and pbrt's film), `fis` places it around its
+    /// pixel's centre by importance-sampling the filter [default: splat for scene files, fis for
+    /// the built-in scenes]. The same for the box filter. See docs/film.md.
+    #[arg(long, value_name = "splat|fis", value_parser = parse_film)]
+    film: Option<FilmMode>,
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N", default_value_t = 0)]
     threads: usize,
@@ -302,6 +309,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         permissive: args.permissive,
         russian_roulette: args.rr_depth,
         heuristic: args.heuristic,
+        film: args.film,
     };
     let outcome = session::render(&request, Some(&STOP), &mut Terminal { quiet: args.quiet })?;
     eprintln!("{}", outcome.summary);
@@ -311,6 +319,11 @@ fn run_render(args: RenderArgs) -> Result<()> {
 /// Parses `--rr-depth`.
 fn parse_russian_roulette(text: &str) -> Result<RussianRoulette, String> {
     RussianRoulette::from_name(text).ok_or_else(|| format!("expected a bounce number ≥ 1 or 'albedo', got '{text}'"))
+}
+
+/// Parses `--film`.
+pub(crate) fn parse_film(text: &str) -> Result<FilmMode, String> {
+    FilmMode::from_name(text).ok_or_else(|| format!("expected 'splat' or 'fis', got '{text}'"))
 }
 
 /// Parses `--heuristic`.

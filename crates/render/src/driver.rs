@@ -16,6 +16,7 @@ use spectrum::Rgb;
 use crate::eye_light;
 use crate::path_tracer::PathTracer;
 use crate::progressive::{Progressive, run_budget};
+use crate::splat_frame;
 use crate::vcm::technique_images::{TechniqueImages, TechniqueLayout};
 use crate::vcm::{RadiusMode, VcmAlgorithm, VcmEngine, VcmSettings};
 
@@ -322,7 +323,8 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
 }
 
 /// Renders one iteration of a per-pixel integrator into `frame` (overwriting it); returns the
-/// number of rejected (non-finite) samples.
+/// number of rejected (non-finite) samples. Under [`scene::filter::FilmMode::Splat`] the
+/// samples are then spread over the pixels their filter reaches ([`crate::splat_frame`]).
 fn render_iteration(
     scene: &Scene,
     seed: u64,
@@ -331,16 +333,16 @@ fn render_iteration(
     radiance: impl Fn(math::Ray, &mut Rng) -> Rgb + Sync,
 ) -> u64 {
     let width = frame.width as usize;
-    frame
+    let rejected = frame
         .pixels
         .par_chunks_mut(width)
         .enumerate()
         .map(|(y, row)| {
             let mut rejected = 0u64;
             for (x, pixel) in row.iter_mut().enumerate() {
-                let index = (y * width + x) as u64;
-                let mut rng = Rng::for_stream(seed, iteration, index);
-                // Raster position through the filter (weight 1 for the box), then the lens.
+                let mut rng = splat_frame::camera_stream(seed, iteration, y * width + x);
+                // Raster position through the filter (weight 1 for the box and when
+                // splatting), then the lens.
                 let primary = scene.camera.sample_primary(x as u32, y as u32, &mut rng);
                 let value = radiance(primary.ray, &mut rng) * primary.weight;
                 *pixel = if value.is_finite() {
@@ -352,5 +354,7 @@ fn render_iteration(
             }
             rejected
         })
-        .sum()
+        .sum();
+    splat_frame::spread_camera_pass(&scene.camera, seed, iteration, &mut frame.pixels, None, None);
+    rejected
 }

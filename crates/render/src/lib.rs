@@ -6,6 +6,7 @@
 //! * [`vcm`]: the VCM engine (light tracing, PPM, BPM, BPT, VCM).
 //! * [`fluorescent`]: wavelength shifts at fluorescent vertices, shared by all integrators.
 //! * [`hash_grid`]: the range search for vertex merging.
+//! * [`splat_frame`]: camera samples splatted over the pixels their filter reaches.
 //! * [`driver`]: the integrators behind one interface, threads, determinism; `render_with`.
 //! * [`progressive`]: one iteration at a time into the film, and the budget loop with
 //!   checkpoints and progress (every front end's loop).
@@ -16,6 +17,7 @@ pub mod fluorescent;
 pub mod hash_grid;
 pub mod path_tracer;
 pub mod progressive;
+pub mod splat_frame;
 pub mod vcm;
 
 pub use driver::{Algorithm, RenderOutput, RenderSettings, render};

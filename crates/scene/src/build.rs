@@ -84,7 +84,11 @@ impl Scene {
         }
         report.lights = lights.len();
         let filter = Filter::from_desc(&desc.film.filter)?;
-        let camera = Camera::from_desc(&desc.camera, width, height)?.with_filter(filter);
+        // Scene files name a reconstruction filter (Mitsuba's hdrfilm defaults to a gaussian):
+        // their pixels splat like Mitsuba's and pbrt's films (`--film` overrides it).
+        let camera = Camera::from_desc(&desc.camera, width, height)?
+            .with_filter(filter)
+            .with_film(crate::filter::FilmMode::Splat);
         let scene = Scene::with_instances(
             desc.name.clone(),
             primitives,

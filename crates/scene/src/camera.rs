@@ -21,7 +21,7 @@
 use math::{PdfA, PdfW, Ray, Rng, Vec2, Vec3, warp};
 
 use crate::desc::{CameraDesc, Projection};
-use crate::filter::Filter;
+use crate::filter::{FilmMode, Filter};
 
 /// How a camera maps raster points to rays.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,6 +65,9 @@ pub struct Camera {
     pub model: CameraModel,
     /// The pixel reconstruction filter.
     pub filter: Filter,
+    /// How camera samples reach the pixels ([`FilmMode::Fis`] unless set; the box filter
+    /// behaves the same in both modes).
+    pub film: FilmMode,
     /// `tan(fov/2)` of the perspective models (unused by the orthographic one).
     tan_half_fov: f32,
     /// Distance of the image plane from the pinhole, in pixels: `width / (2 tan(fov/2))`
@@ -150,6 +153,7 @@ impl Camera {
             height,
             model: CameraModel::Pinhole,
             filter: Filter::Box,
+            film: FilmMode::Fis,
             tan_half_fov,
             image_plane_distance: width as f32 / (2.0 * tan_half_fov),
         }
@@ -227,6 +231,7 @@ impl Camera {
             height,
             model,
             filter: Filter::Box,
+            film: FilmMode::Fis,
             tan_half_fov,
             image_plane_distance,
         })
@@ -235,6 +240,36 @@ impl Camera {
     /// The same camera with reconstruction filter `filter`.
     pub fn with_filter(self, filter: Filter) -> Self {
         Self { filter, ..self }
+    }
+
+    /// The same camera with film mode `film`.
+    pub fn with_film(self, film: FilmMode) -> Self {
+        Self { film, ..self }
+    }
+
+    /// Whether camera samples are splatted to the pixels around them ([`FilmMode::Splat`] with a
+    /// filter other than the box); otherwise every camera sample counts for its own pixel.
+    pub fn splats_camera_samples(&self) -> bool {
+        self.film == FilmMode::Splat && !self.filter.is_box()
+    }
+
+    /// Under [`FilmMode::Splat`], the weight `f(raster − c_j) / N_j` (per pixel², `N_j` the
+    /// expected weight sum over the image, [`Filter::clipped_integral_1d`] on both axes) with
+    /// which a sample at `raster` (pixels) counts for pixel `(x, y)` (centre `c_j`).
+    pub fn splat_weight(&self, raster: Vec2, x: u32, y: u32) -> f32 {
+        let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+        let f = self.filter.profile_1d(raster.x - cx) * self.filter.profile_1d(raster.y - cy);
+        if f == 0.0 {
+            return 0.0;
+        }
+        f / self.splat_normalization(x, y)
+    }
+
+    /// `N_j` of pixel `(x, y)` under [`FilmMode::Splat`] (pixels²): `∫_image f(x − c_j) dx`.
+    pub fn splat_normalization(&self, x: u32, y: u32) -> f32 {
+        let nx = self.filter.clipped_integral_1d(x as f32 + 0.5, self.width as f32);
+        let ny = self.filter.clipped_integral_1d(y as f32 + 0.5, self.height as f32);
+        (nx * ny) as f32
     }
 
     /// Number of pixels.
@@ -250,9 +285,10 @@ impl Camera {
 
     /// A raster position in pixel `(x, y)` from `u ∈ [0,1)²` through the filter: the pixel
     /// centre plus a sampled offset, and the filter weight `(f/∫f)/pdf`. With the box filter
-    /// this is exactly `(x + u₀, y + u₁)` with weight 1.
+    /// or when splatting ([`Camera::splats_camera_samples`]) this is exactly `(x + u₀, y + u₁)`
+    /// with weight 1 (the filter is applied when the sample is spread over the pixels).
     pub fn sample_pixel(&self, x: u32, y: u32, u: [f32; 2]) -> (Vec2, f32) {
-        if self.filter.is_box() {
+        if self.filter.is_box() || self.film == FilmMode::Splat {
             return (Vec2::new(x as f32 + u[0], y as f32 + u[1]), 1.0);
         }
         let (offset, weight) = self.filter.sample(u);
@@ -377,11 +413,12 @@ impl Camera {
     }
 
     /// Whether a raster position contributes to some pixel: inside the image for the box
-    /// filter, otherwise within the filter radius of some pixel centre (up to `radius − 0.5`
-    /// pixels outside the image).
+    /// filter and under [`FilmMode::Splat`] (whose pixels integrate over the image only),
+    /// otherwise within the filter radius of some pixel centre (up to `radius − 0.5` pixels
+    /// outside the image).
     pub fn accepts_raster(&self, raster: Vec2) -> bool {
         let (w, h) = (self.width as f32, self.height as f32);
-        if self.filter.is_box() {
+        if self.filter.is_box() || self.film == FilmMode::Splat {
             return raster.x >= 0.0 && raster.x < w && raster.y >= 0.0 && raster.y < h;
         }
         let margin = self.filter.radius() - 0.5;
@@ -443,7 +480,8 @@ impl Camera {
     }
 
     /// The pixels a raster position contributes to, with the filter's normalised value
-    /// `f(raster − centre)/∫f` (per pixel²) for each: for the box filter the one pixel the
+    /// `f(raster − centre)/∫f` (per pixel²) for each ([`Camera::splat_weight`]
+    /// `f(raster − centre)/N_j` under [`FilmMode::Splat`]): for the box filter the one pixel the
     /// position lies in (weight 1), otherwise every pixel whose centre lies within the filter
     /// radius on both axes (pixels with a zero filter value included).
     pub fn filter_pixels(&self, raster: Vec2) -> impl Iterator<Item = (u32, f32)> + '_ {
@@ -462,10 +500,13 @@ impl Camera {
             (range(raster.x, w), range(raster.y, h))
         };
         let is_box = self.filter.is_box();
+        let splat = self.film == FilmMode::Splat;
         (y_range.0..=y_range.1).flat_map(move |y| {
             (x_range.0..=x_range.1).map(move |x| {
                 let value = if is_box {
                     1.0
+                } else if splat {
+                    self.splat_weight(raster, x, y)
                 } else {
                     self.filter.eval_normalized(raster - Vec2::new(x as f32 + 0.5, y as f32 + 0.5))
                 };

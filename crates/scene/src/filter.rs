@@ -5,6 +5,11 @@
 //! [`Filter::sample`] and carry its weight `(f/∫f)/pdf`; light-tracing splats landing at `x` add
 //! `value × `[`Filter::eval_normalized`]`(x − c_j)` to every pixel within [`Filter::radius`].
 //! Offsets are in pixels; `eval_normalized` is a density per unit raster area (per pixel²).
+//!
+//! That is the film mode [`FilmMode::Fis`]. In [`FilmMode::Splat`] camera samples are uniform in
+//! their pixel and, like light-tracing splats, add `value × f(x − c_j) / N_j` to every pixel `j`
+//! within the radius, `N_j = ∫_image f(x − c_j) dx` the expected weight sum of pixel `j` (the
+//! product of [`Filter::clipped_integral_1d`] on both axes; `∫f` away from the borders).
 
 use math::Vec2;
 
@@ -16,6 +21,45 @@ const GAUSSIAN_BINS: usize = 128;
 
 /// Simpson intervals per table bin when integrating the gaussian profile (in f64).
 const SIMPSON_STEPS: usize = 32;
+
+/// Entries of the gaussian's table of tails `∫_{k+½}^{r} g` (pixel centres lie at half-integer
+/// distances from the image borders); longer distances are integrated when asked.
+const TAIL_ENTRIES: usize = 32;
+
+/// Simpson intervals for one tail integral of the gaussian profile (in f64).
+const TAIL_STEPS: usize = 512;
+
+/// How camera samples reach the pixels (the command line's `--film`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FilmMode {
+    /// Filter importance sampling: a pixel's camera sample is placed around its centre by
+    /// [`Filter::sample`] and counts for that pixel only, weighted `(f/∫f)/pdf`.
+    #[default]
+    Fis,
+    /// Splatting (Mitsuba's and pbrt's film): camera samples are uniform in their pixel and add
+    /// `value × f(x − c_j)/N_j` to every pixel `j` within the radius, `N_j` the expected weight
+    /// sum of pixel `j` over the image rectangle. Identical to [`FilmMode::Fis`] for the box.
+    Splat,
+}
+
+impl FilmMode {
+    /// The command-line name (`fis`, `splat`).
+    pub fn name(self) -> &'static str {
+        match self {
+            FilmMode::Fis => "fis",
+            FilmMode::Splat => "splat",
+        }
+    }
+
+    /// Parses [`FilmMode::name`]'s names.
+    pub fn from_name(name: &str) -> Option<FilmMode> {
+        match name {
+            "fis" => Some(FilmMode::Fis),
+            "splat" => Some(FilmMode::Splat),
+            _ => None,
+        }
+    }
+}
 
 /// A pixel reconstruction filter.
 ///
@@ -52,6 +96,8 @@ pub struct GaussianFilter {
     /// Cumulative distribution of the profile over [`GAUSSIAN_BINS`] equal bins of
     /// `[−r, r]`; `cdf[0] = 0`, `cdf[GAUSSIAN_BINS] = 1`.
     cdf: [f32; GAUSSIAN_BINS + 1],
+    /// `∫_{k+½}^{r} g(x) dx` (pixels) for `k < TAIL_ENTRIES`.
+    tails: [f32; TAIL_ENTRIES],
 }
 
 impl GaussianFilter {
@@ -81,7 +127,22 @@ impl GaussianFilter {
             cdf[i + 1] = (running / total) as f32;
         }
         cdf[GAUSSIAN_BINS] = 1.0;
-        Self { stddev, radius, alpha, bias, inv_integral: (1.0 / total) as f32, cdf }
+        let tails = std::array::from_fn(|k| simpson(profile, k as f64 + 0.5, r64, TAIL_STEPS) as f32);
+        Self { stddev, radius, alpha, bias, inv_integral: (1.0 / total) as f32, cdf, tails }
+    }
+
+    /// `∫_d^r g(x) dx` (pixels) for `d ≥ 0`: from the table at half-integer `d`, integrated
+    /// otherwise.
+    fn tail(&self, d: f32) -> f64 {
+        if d >= self.radius {
+            return 0.0;
+        }
+        let k = (d - 0.5).round();
+        if k >= 0.0 && (k as usize) < TAIL_ENTRIES && (d - 0.5 - k).abs() < 1e-4 {
+            return self.tails[k as usize] as f64;
+        }
+        let (alpha, bias) = (self.alpha as f64, self.bias as f64);
+        simpson(|x| ((alpha * x * x).exp() - bias).max(0.0), d as f64, self.radius as f64, TAIL_STEPS)
     }
 
     /// The 1D profile `g(x)` (not normalised).
@@ -105,6 +166,19 @@ impl GaussianFilter {
         let pdf = probability / width;
         (x, self.profile(x) * self.inv_integral / pdf)
     }
+}
+
+/// Simpson's rule for `∫_a^b f` with `steps` (even) intervals.
+fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, steps: usize) -> f64 {
+    if b <= a {
+        return 0.0;
+    }
+    let h = (b - a) / steps as f64;
+    let mut sum = f(a) + f(b);
+    for k in 1..steps {
+        sum += f(a + k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
+    }
+    sum * h / 3.0
 }
 
 impl Filter {
@@ -159,6 +233,50 @@ impl Filter {
             }
             Filter::Gaussian(g) => g.profile(offset.x) * g.profile(offset.y) * g.inv_integral * g.inv_integral,
         }
+    }
+
+    /// The 1D profile `f₁` (not normalised, dimensionless) at `x` pixels from a pixel centre;
+    /// `f(x, y) = f₁(x) f₁(y)`: box 1 on `|x| ≤ ½`, tent `1 − |x|/r`, the truncated gaussian.
+    pub fn profile_1d(&self, x: f32) -> f32 {
+        match self {
+            Filter::Box => {
+                if x.abs() <= 0.5 {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            Filter::Tent { radius } => (1.0 - x.abs() / radius).max(0.0),
+            Filter::Gaussian(g) => g.profile(x),
+        }
+    }
+
+    /// `∫_d^∞ f₁(x) dx` (pixels) for `d ≥ 0`: the part of the profile beyond `d`.
+    pub fn tail_1d(&self, d: f32) -> f64 {
+        let d = d.max(0.0);
+        match self {
+            Filter::Box => (0.5 - d as f64).max(0.0),
+            Filter::Tent { radius } => {
+                let rest = (*radius as f64 - d as f64).max(0.0);
+                rest * rest / (2.0 * *radius as f64)
+            }
+            Filter::Gaussian(g) => g.tail(d),
+        }
+    }
+
+    /// `∫ f₁` over the whole line (pixels).
+    pub fn integral_1d(&self) -> f64 {
+        match self {
+            Filter::Gaussian(g) => 1.0 / g.inv_integral as f64,
+            _ => 2.0 * self.tail_1d(0.0),
+        }
+    }
+
+    /// `∫_0^size f₁(x − centre) dx` (pixels): the expected weight sum along one axis of a pixel
+    /// whose centre is at `centre` (pixels, inside `[0, size]`) in an image `size` pixels wide,
+    /// under [`FilmMode::Splat`]. Equals [`Filter::integral_1d`] at least a radius from both ends.
+    pub fn clipped_integral_1d(&self, centre: f32, size: f32) -> f64 {
+        self.integral_1d() - self.tail_1d(centre) - self.tail_1d(size - centre)
     }
 
     /// Samples an offset (pixels) from a pixel centre with `u ∈ [0,1)²`. Returns the offset and

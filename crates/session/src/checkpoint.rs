@@ -53,6 +53,8 @@ pub struct Recorded {
     pub russian_roulette: RussianRoulette,
     /// MIS heuristic of the path tracer.
     pub heuristic: Heuristic,
+    /// Film mode, `fis` or `splat` (absent in checkpoints written before it existed: `fis`).
+    pub film: String,
     /// What the scene was built from.
     pub fingerprint: Fingerprint,
 }
@@ -96,6 +98,7 @@ pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
         writeln!(out, "spectral={}", r.spectral)?;
         writeln!(out, "russian_roulette={}", r.russian_roulette.name())?;
         writeln!(out, "heuristic={}", r.heuristic.name())?;
+        writeln!(out, "film={}", r.film)?;
         writeln!(out, "iterations={}", film.iterations())?;
         writeln!(out, "rejected={}", film.rejected_samples())?;
         writeln!(out)?;
@@ -188,6 +191,7 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
             None => Heuristic::default(),
             Some(name) => Heuristic::from_name(name).ok_or_else(|| missing("heuristic"))?,
         },
+        film: fields.get("film").map_or_else(|| "fis".to_string(), |f| f.to_string()),
         fingerprint: Fingerprint { hash: scene_hash, files },
     };
     let iterations: u64 = field(&fields, "iterations").ok_or_else(|| missing("iterations"))?;
@@ -232,6 +236,7 @@ mod tests {
             spectral: true,
             russian_roulette: RussianRoulette::Albedo,
             heuristic: Heuristic::Power,
+            film: "splat".into(),
             fingerprint: Fingerprint::builtin(450, (3, 2)),
         };
         let sums: Vec<[f64; 3]> = (0..6).map(|i| [i as f64 * 0.1, 1.0 / 3.0, f64::MIN_POSITIVE]).collect();

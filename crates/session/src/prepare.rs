@@ -9,6 +9,7 @@ use anyhow::{Result, bail};
 use render::driver::Budget;
 use render::vcm::technique_images::TechniqueLayout;
 use render::{Algorithm, RenderSettings};
+use scene::filter::FilmMode;
 use scene::{Film, Scene};
 
 use crate::Notice;
@@ -69,6 +70,17 @@ impl Prepared {
                 request.spectral = recorded.spectral;
                 request.russian_roulette = recorded.russian_roulette;
                 request.heuristic = recorded.heuristic;
+                let mode = FilmMode::from_name(&recorded.film)
+                    .ok_or_else(|| anyhow::anyhow!("unknown film mode '{}' in '{}'", recorded.film, path.display()))?;
+                if let Some(asked) = request.film.filter(|asked| *asked != mode) {
+                    bail!(
+                        "cannot resume '{}' with --film {}: it was rendered with --film {}",
+                        path.display(),
+                        asked.name(),
+                        mode.name()
+                    );
+                }
+                request.film = Some(mode);
                 if request.checkpoint.is_none() {
                     request.checkpoint = Some(path.clone());
                 }
@@ -112,7 +124,7 @@ impl Prepared {
         if let Some(line) = &loaded.loaded {
             observer.notice(Notice::Progress(line.clone()));
         }
-        let LoadedScene { scene, file_max_length, file_samples, fingerprint, .. } = loaded;
+        let LoadedScene { mut scene, file_max_length, file_samples, fingerprint, .. } = loaded;
         if let Some((_, recorded, path)) = &resumed
             && let Some(difference) = fingerprint.difference(recorded)
         {
@@ -121,6 +133,9 @@ impl Prepared {
                  scene, or start a new render)",
                 path.display()
             );
+        }
+        if let Some(film) = r.film {
+            scene.camera.film = film;
         }
         let mut settings = RenderSettings {
             algorithm: r.algorithm,
@@ -168,6 +183,7 @@ impl Prepared {
             spectral: r.spectral,
             russian_roulette: r.russian_roulette,
             heuristic: r.heuristic,
+            film: scene.camera.film.name().to_string(),
             fingerprint,
         };
 

@@ -1,6 +1,7 @@
 //! What a front end asks a session for.
 
 use render::path_tracer::{Heuristic, RussianRoulette};
+use scene::filter::FilmMode;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -74,6 +75,11 @@ pub struct Request {
     pub russian_roulette: RussianRoulette,
     /// MIS heuristic of the path tracer (`pt`).
     pub heuristic: Heuristic,
+    /// How camera samples reach the pixels (`--film`). `None`: the scene's choice, splatting
+    /// for scene files (which name a reconstruction filter), filter importance sampling for the
+    /// built-in scenes. A resumed render keeps its checkpoint's mode (asking for another one is
+    /// an error).
+    pub film: Option<FilmMode>,
 }
 
 impl Request {
@@ -109,6 +115,7 @@ impl Request {
             resume: None,
             russian_roulette: defaults.russian_roulette,
             heuristic: defaults.heuristic,
+            film: None,
         }
     }
 }

@@ -59,6 +59,9 @@ pub struct ConformanceArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub threads: usize,
+    /// Film mode, as `vcm render --film` [default: splat, the scene files' default].
+    #[arg(long, value_name = "splat|fis", value_parser = crate::parse_film)]
+    pub film: Option<scene::filter::FilmMode>,
     /// Also write the table with date, commit, machine and command to this Markdown file.
     #[arg(long, value_name = "FILE")]
     pub markdown: Option<PathBuf>,
@@ -194,6 +197,7 @@ fn render_and_judge(
     request.threads = args.threads;
     request.permissive = args.permissive;
     request.keep_variance = true;
+    request.film = args.film;
     let rendered = catch(|| session::render(&request, None, &mut Quiet));
     let film = match rendered {
         Ok(outcome) => outcome.output.film,

@@ -3,6 +3,7 @@
 //! weight of an emitter hit by a camera path (s = 0).
 
 use math::{Rng, Vec2, Vec3};
+use scene::filter::FilmMode;
 use scene::{Bsdf, Scene};
 use spectrum::{Rgb, SpectralMode};
 
@@ -31,7 +32,8 @@ pub enum SplatTarget {
     /// Added as is to this pixel (row-major index).
     Pixel(u32),
     /// Spread over the pixels [`scene::Camera::filter_pixels`] lists for this raster position
-    /// (pixels), each receiving `value × f(raster − centre)/∫f`.
+    /// (pixels), each receiving `value × f(raster − centre)/∫f` (`/N_j` under
+    /// [`scene::filter::FilmMode::Splat`], [`scene::Camera::splat_weight`]).
     Filtered(Vec2),
 }
 
@@ -84,8 +86,9 @@ pub fn connect_to_camera<S: SpectralMode>(
         if !value.is_black() {
             splats.push(Splat { target: SplatTarget::Pixel(pixel), value, s });
         }
-    } else if it.rebase() && weighted {
-        // Every pixel weighs the path with its own radius.
+    } else if it.rebase() && weighted && camera.film == FilmMode::Fis {
+        // Every pixel weighs the path with its own radius (its camera samples, spread by the
+        // filter around its centre, use that radius).
         for (pixel, filter) in camera.filter_pixels(connection.raster) {
             let k = &it.pixel_constants(pixel as usize);
             let value = unweighted * (weight_for(k) * camera_pdf_a * filter / k.light_path_count);
@@ -94,7 +97,13 @@ pub fn connect_to_camera<S: SpectralMode>(
             }
         }
     } else {
-        let k = &it.constants;
+        // Splatting: every pixel counts the camera samples of the pixel containing the raster
+        // point, so the path takes that pixel's constants.
+        let containing = || {
+            let (x, y) = (connection.raster.x as u32, connection.raster.y as u32);
+            (y.min(camera.height - 1) * camera.width + x.min(camera.width - 1)) as usize
+        };
+        let k = if it.rebase() { &it.pixel_constants(containing()) } else { &it.constants };
         let value = unweighted * (weight_for(k) * camera_pdf_a / k.light_path_count);
         if !value.is_black() {
             splats.push(Splat { target: SplatTarget::Filtered(connection.raster), value, s });

@@ -573,7 +573,7 @@ impl<S: SpectralMode> Engine<S> {
                 if it.techniques.light_trace_only {
                     return FamilyValues::default();
                 }
-                let mut rng = Rng::for_stream(seed, iteration, index as u64);
+                let mut rng = crate::splat_frame::camera_stream(seed, iteration, index);
                 let (x, y) = ((index % width) as u32, (index / width) as u32);
                 let light_path = store.path(index);
                 let wavelengths = sets.get(seed, iteration, index as u64);
@@ -581,6 +581,16 @@ impl<S: SpectralMode> Engine<S> {
                 let merge = scoped.as_ref();
                 trace_camera_path_recorded(scene, it, x, y, &mut rng, light_path, merge, &wavelengths, techniques)
             });
+        if !it.techniques.light_trace_only {
+            crate::splat_frame::spread_camera_pass(
+                &scene.camera,
+                seed,
+                iteration,
+                &mut frame.pixels,
+                self.family_frames.as_mut(),
+                self.technique_frame.as_mut(),
+            );
+        }
         let camera_pass = start.elapsed() - light_pass - grid_build;
         let splats = self.splat_sums.finish(
             &mut frame.pixels,
@@ -668,7 +678,7 @@ impl<S: SpectralMode> Engine<S> {
                 let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
                 let wavelengths = sets.get(seed, iteration, index as u64);
                 trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &wavelengths);
-                let mut rng = Rng::for_stream(seed, iteration, index as u64);
+                let mut rng = crate::splat_frame::camera_stream(seed, iteration, index);
                 let light_path = LightPath::Contiguous(&vertices);
                 let techniques = layout.map(|layout| {
                     let pixel_images = &mut technique_row[column * images..(column + 1) * images];
@@ -716,6 +726,14 @@ impl<S: SpectralMode> Engine<S> {
                 }
             }
         }
+        crate::splat_frame::spread_camera_pass(
+            &scene.camera,
+            seed,
+            iteration,
+            &mut frame.pixels,
+            family_frames.as_deref_mut(),
+            self.technique_frame.as_mut(),
+        );
         let camera_pass = start.elapsed() - light_pass;
         let splats = self.splat_sums.finish(
             &mut frame.pixels,
