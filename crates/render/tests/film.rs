@@ -335,7 +335,7 @@ fn technique_images_and_families_sum_to_the_splatted_frame() {
 fn mean_variance(scene: &Scene, algorithm: &str, iterations: u64) -> f64 {
     let s = RenderSettings { budget: Budget::Iterations(iterations), ..settings(algorithm, 9) };
     let film = render(scene, &s).unwrap().film;
-    let variance = film.variance_of_mean();
+    let variance = film.variance_of_mean().expect("the film keeps its variance by default");
     variance.iter().map(|v| v.iter().map(|c| *c as f64).sum::<f64>()).sum::<f64>() / (3.0 * variance.len() as f64)
 }
 
