@@ -36,21 +36,7 @@ pub fn two_sided_p(z: f64) -> f64 {
     erfc(z / std::f64::consts::SQRT_2).clamp(0.0, 1.0)
 }
 
-/// The complementary error function, by the Chebyshev-fitted rational approximation of
-/// Numerical Recipes (`erfcc`): relative error below 1.2e-7 for every argument.
-pub fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let poly = -1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98 + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    let result = t * (-z * z + poly).exp();
-    if x >= 0.0 { result } else { 2.0 - result }
-}
+pub use math::special::erfc;
 
 #[cfg(test)]
 mod tests {

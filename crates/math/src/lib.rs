@@ -11,6 +11,7 @@ pub mod octahedral;
 pub mod pdf;
 pub mod ray;
 pub mod rng;
+pub mod special;
 pub mod warp;
 
 pub use bounds::Aabb;

@@ -8,20 +8,7 @@
 
 use std::path::Path;
 
-/// Two-sided p-value of `|z|` (the complementary error function, Numerical Recipes' `erfcc`,
-/// relative error below 1.2e-7).
-fn two_sided_p(z: f64) -> f64 {
-    let x = z.abs() / std::f64::consts::SQRT_2;
-    let t = 1.0 / (1.0 + 0.5 * x);
-    let poly = -1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98 + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    t * (-x * x + poly).exp()
-}
+use image_metrics::ztest::two_sided_p;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -52,7 +39,7 @@ fn main() {
         let (x, y) = (i % w, i / w);
         let distance = x.min(y).min(w - 1 - x).min(h - 1 - y).min(4);
         total[distance] += 1;
-        if !(two_sided_p(z) >= threshold) {
+        if !(two_sided_p(z.abs()) >= threshold) {
             failing[distance] += 1;
         }
     }
