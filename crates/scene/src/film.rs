@@ -88,18 +88,15 @@ impl Film {
     /// Adds one iteration's frame and the number of samples the iteration rejected.
     pub fn add_iteration(&mut self, frame: &FrameBuffer, rejected_samples: u64) {
         assert_eq!((frame.width, frame.height), (self.width, self.height), "frame size must match the film");
-        if self.has_variance() {
-            for ((sum, squares), pixel) in self.sum.iter_mut().zip(&mut self.sum_squares).zip(&frame.pixels) {
-                for (c, value) in pixel.to_array().into_iter().enumerate() {
-                    let value = value as f64;
-                    sum[c] += value;
-                    squares[c] += value * value;
-                }
+        // Without the sums of squares `squares` is empty and only the sums are added.
+        for (i, (sum, pixel)) in self.sum.iter_mut().zip(&frame.pixels).enumerate() {
+            let value = pixel.to_array().map(f64::from);
+            for c in 0..3 {
+                sum[c] += value[c];
             }
-        } else {
-            for (sum, pixel) in self.sum.iter_mut().zip(&frame.pixels) {
-                for (c, value) in pixel.to_array().into_iter().enumerate() {
-                    sum[c] += value as f64;
+            if let Some(squares) = self.sum_squares.get_mut(i) {
+                for c in 0..3 {
+                    squares[c] += value[c] * value[c];
                 }
             }
         }

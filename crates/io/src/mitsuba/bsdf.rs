@@ -569,7 +569,7 @@ impl<'a> Loader<'a> {
 /// A texture as Mitsuba evaluates it as a float (`eval_1`, what roughness reads): a checkerboard
 /// there takes `color0` where the parities of `u` and `v` differ, the opposite of its colour
 /// evaluation (Mitsuba 2 and 3, "legacy scalar checkerboard convention"), so its colours swap.
-fn float_evaluation(texture: Texture) -> Texture {
+pub(super) fn float_evaluation(texture: Texture) -> Texture {
     match texture {
         Texture::Checkerboard { color0, color1, to_uv } => {
             Texture::Checkerboard { color0: color1, color1: color0, to_uv }

@@ -9,6 +9,7 @@ use scene::material::{Material, PrincipledParameters, PrincipledThinParameters};
 use spectrum::Rgb;
 
 use super::Loader;
+use super::bsdf::float_evaluation;
 use super::colour::SpectrumUse;
 use super::props::Plugin;
 use crate::scene_error::SceneError;
@@ -92,17 +93,11 @@ impl<'a> Loader<'a> {
         Ok(Material::PrincipledThin(Box::new(parameters)))
     }
 
-    /// A scalar parameter: a texture, or a number checked to lie in `[0, max]`. Mitsuba 3's
-    /// `checkerboard` answers scalar lookups (`eval_1`) with its two colours swapped relative to
-    /// its colour lookups (`eval`); the scene files' references are rendered that way, so a
-    /// checkerboard read as a scalar is loaded with `color0` and `color1` exchanged.
+    /// A scalar parameter: a texture, or a number checked to lie in `[0, max]`. A checkerboard
+    /// read as a scalar takes Mitsuba's float-evaluation parity ([`float_evaluation`]: its
+    /// colours are exchanged), as the suite's references are rendered.
     fn weight(&mut self, p: &Plugin<'a>, name: &str, default: f64, max: f64) -> Result<Texture, SceneError> {
-        let texture = match self.texture_prop(p, name, default, SpectrumUse::Unbounded)? {
-            Texture::Checkerboard { color0, color1, to_uv } => {
-                Texture::Checkerboard { color0: color1, color1: color0, to_uv }
-            }
-            other => other,
-        };
+        let texture = float_evaluation(self.texture_prop(p, name, default, SpectrumUse::Unbounded)?);
         if let Some(c) = texture.as_constant()
             && !(c.r >= 0.0 && c.max_component() <= max as f32)
         {
