@@ -1,0 +1,368 @@
+#!/usr/bin/env python3
+"""Measures this renderer against its peers, Mitsuba 3 and SmallVCM, on this machine in one run.
+
+What it measures (issue #13's table; every figure is a ratio of two runs made minutes apart):
+
+1. Mitsuba's Cornell box (`../shared/scenes/mitsuba/cornell-box/cornell_box.xml`): Mitsuba 3
+   `llvm_ad_rgb` `path` renders SPP samples per pixel (median time T over the seeds, JIT compiled
+   beforehand); we render the same file for T seconds (`vcm render -t T`) with each of our six
+   algorithms. Error: relMSE (`vcm compare`, epsilon 0.01) against `cbox_dict.exr`, the converged
+   Mitsuba reference beside the scene (832 spp; its own noise is part of both errors).
+2. Mitsuba's `matpreview` (61,600 triangles, environment map, 960x720): per-pixel variance of a
+   16-spp image (sample variance over independent seeds, averaged over pixels and channels) times
+   the seconds that image took, Mitsuba `path` against our `pt` with 16 iterations.
+3. SmallVCM (built from its public source with `g++ -O3 -fopenmp`), its four scenes at 512x512:
+   the wall time of the whole process for ITERATIONS iterations of `vcm`, `bpt` and `pt`, and
+   `vcm`'s relMSE after EQUAL seconds against a REFERENCE-iteration SmallVCM `vcm` render (cached).
+
+Render times are the renderers' own (Mitsuba: `mi.render` until the image is in memory; ours: the
+summary line's render time, which excludes loading), except for SmallVCM's table, which times
+whole processes of both. Numbers are meaningful only on a quiet machine.
+
+Setup, done once and cached in target/peer-bench/: a Python virtual environment with
+`pip install mitsuba numpy` (the llvm variants need the system's LLVM: `apt-get install libllvm19`,
+which this script runs when it is root and the library is missing), and SmallVCM's source (a
+checkout given with --smallvcm-src, else `git clone` of github.com/SmallVCM/SmallVCM). A peer
+that cannot be set up is reported as SKIPPED with the reason, and the script exits with status 1.
+
+Usage (from the repository root, after `cargo build --release`):
+
+    scripts/peer-bench.py                      # everything, print the tables
+    scripts/peer-bench.py --update             # ... and rewrite docs/performance.md's peers table
+    scripts/peer-bench.py --quick              # tiny settings: checks the pipeline in ~2 minutes
+    scripts/peer-bench.py --only smallvcm      # one peer (mitsuba | smallvcm)
+"""
+
+import argparse
+import importlib.util
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+CACHE = os.path.join(ROOT, "target", "peer-bench")
+VENV = os.path.join(CACHE, "venv")
+SHARED = os.path.join(os.path.dirname(ROOT), "shared", "scenes", "mitsuba")
+ALGORITHMS = ["pt", "lt", "ppm", "bpm", "bpt", "vcm"]
+SMALLVCM_SCENES = ["cornell-sun", "cornell-area-mirror", "cornell-point", "cornell-env"]
+SMALLVCM_URL = "https://github.com/SmallVCM/SmallVCM"
+
+
+def perf_tables():
+    """The stamp and marker helpers of scripts/perf-tables.py (one implementation)."""
+    spec = importlib.util.spec_from_file_location("perf_tables", os.path.join(ROOT, "scripts", "perf-tables.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def log(message):
+    print(f"peer-bench: {message}", file=sys.stderr, flush=True)
+
+
+def fail(message):
+    sys.exit(f"peer-bench: {message}")
+
+
+def run(command, **kwargs):
+    result = subprocess.run(command, capture_output=True, text=True, cwd=kwargs.pop("cwd", ROOT), **kwargs)
+    if result.returncode != 0:
+        fail(f"'{' '.join(command)}' failed ({result.returncode}):\n{result.stdout}\n{result.stderr}")
+    return result.stdout + result.stderr
+
+
+class Skip(Exception):
+    """A peer that cannot be set up on this machine: reported, never silently dropped."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Bootstrap: the script re-runs itself with the virtual environment's Python (numpy, mitsuba).
+
+
+def in_venv():
+    return os.path.realpath(sys.prefix) == os.path.realpath(VENV)
+
+
+def bootstrap():
+    python = os.path.join(VENV, "bin", "python")
+    if not os.path.exists(python):
+        log(f"creating {VENV} (pip install mitsuba numpy; once)")
+        os.makedirs(CACHE, exist_ok=True)
+        run([sys.executable, "-m", "venv", VENV])
+        run([python, "-m", "pip", "install", "--quiet", "mitsuba", "numpy"])
+    os.execv(python, [python, os.path.abspath(__file__)] + sys.argv[1:])
+
+
+def llvm_variant():
+    """Selects Mitsuba's llvm_ad_rgb variant, installing libllvm19 when root and it is missing."""
+    import mitsuba as mi
+
+    try:
+        mi.set_variant("llvm_ad_rgb")
+        return mi
+    except Exception as first:  # Mitsuba raises ImportError or RuntimeError without LLVM
+        if os.geteuid() != 0 or shutil.which("apt-get") is None:
+            raise Skip(f"Mitsuba's llvm_ad_rgb variant does not load ({first}); install LLVM: "
+                       "apt-get install libllvm19") from first
+    log("Mitsuba's llvm variant needs LLVM: apt-get install -y libllvm19")
+    run(["apt-get", "install", "-y", "-q", "libllvm19"])
+    # Dr.Jit looks for LLVM when it is imported: start again in a fresh interpreter.
+    os.execv(sys.executable, [sys.executable, os.path.abspath(__file__)] + sys.argv[1:])
+
+
+# ---------------------------------------------------------------------------------------------
+# Our renderer.
+
+
+def vcm_render(vcm, arguments, output):
+    """Runs `vcm render ARGUMENTS -o OUTPUT`; returns (render seconds, process wall seconds)."""
+    start = time.perf_counter()
+    text = run([vcm, "render"] + arguments + ["-o", output])
+    wall = time.perf_counter() - start
+    match = re.search(r"(\d+) iterations? in ([0-9.]+) s", text)
+    if match is None:
+        fail(f"no summary line in the output of vcm render {' '.join(arguments)}:\n{text}")
+    return float(match.group(2)), wall
+
+
+def rel_mse(vcm, image, reference):
+    text = run([vcm, "compare", image, reference])
+    match = re.search(r"relative MSE:\s+([0-9.eE+-]+)", text)
+    if match is None:
+        fail(f"no relative MSE in the output of vcm compare:\n{text}")
+    return float(match.group(1))
+
+
+def scratch(*parts):
+    path = os.path.join(CACHE, *parts)
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    return path
+
+
+# ---------------------------------------------------------------------------------------------
+# Mitsuba 3.
+
+
+def mitsuba_render(mi, scene, spp, seed, output):
+    """Renders with Mitsuba; returns the seconds until the image is in memory."""
+    import numpy as np
+
+    start = time.perf_counter()
+    image = np.array(mi.render(scene, spp=spp, seed=seed))
+    seconds = time.perf_counter() - start
+    mi.Bitmap(image).write(output)
+    return seconds
+
+
+def mitsuba_cornell(vcm, settings):
+    mi = llvm_variant()
+    folder = os.path.join(SHARED, "cornell-box")
+    path, reference = os.path.join(folder, "cornell_box.xml"), os.path.join(folder, "cbox_dict.exr")
+    for needed in (path, reference):
+        if not os.path.exists(needed):
+            raise Skip(f"{needed} is missing (../shared beside the repository)")
+    scene = mi.load_file(path)
+    spp, seeds = settings["cornell_spp"], settings["seeds"]
+    mitsuba_render(mi, scene, spp, 1000, scratch("cornell", "warmup.exr"))  # JIT compilation
+    times, errors = [], []
+    for seed in range(seeds):
+        output = scratch("cornell", f"mitsuba-{seed}.exr")
+        times.append(mitsuba_render(mi, scene, spp, seed, output))
+        errors.append(rel_mse(vcm, output, reference))
+    budget = statistics.median(times)
+    log(f"Cornell box: Mitsuba path {spp} spp in {budget:.2f} s, relMSE {statistics.mean(errors):.3g}")
+    rows = [("Mitsuba 3 `path`", f"{spp} spp", budget, statistics.mean(errors))]
+    for algorithm in ALGORITHMS:
+        ours_times, ours_errors = [], []
+        for seed in range(seeds):
+            output = scratch("cornell", f"{algorithm}-{seed}.exr")
+            seconds, _ = vcm_render(vcm, ["--scene", path, "-a", algorithm, "-t", f"{budget:.3f}", "--seed", str(seed),
+                                          "--quiet"], output)
+            ours_times.append(seconds)
+            ours_errors.append(rel_mse(vcm, output, reference))
+        rows.append((f"ours `{algorithm}`", f"`-t {budget:.2f}`", statistics.mean(ours_times),
+                     statistics.mean(ours_errors)))
+        log(f"Cornell box: ours {algorithm} relMSE {statistics.mean(ours_errors):.3g}")
+    return rows
+
+
+def variance_across(mi, paths):
+    """Mean over pixels and channels of the per-pixel sample variance across images."""
+    import numpy as np
+
+    stack = np.stack([np.array(mi.Bitmap(p), dtype=np.float64)[..., :3] for p in paths])
+    return float(np.mean(np.var(stack, axis=0, ddof=1)))
+
+
+def mitsuba_matpreview(vcm, settings):
+    mi = llvm_variant()
+    path = os.path.join(SHARED, "matpreview", "matpreview.xml")
+    if not os.path.exists(path):
+        raise Skip(f"{path} is missing (../shared beside the repository)")
+    scene = mi.load_file(path)
+    spp, renders = settings["matpreview_spp"], settings["matpreview_renders"]
+    mitsuba_render(mi, scene, spp, 1000, scratch("matpreview", "warmup.exr"))
+    theirs, theirs_times = [], []
+    ours, ours_times = [], []
+    for seed in range(renders):
+        theirs.append(scratch("matpreview", f"mitsuba-{seed}.exr"))
+        theirs_times.append(mitsuba_render(mi, scene, spp, seed, theirs[-1]))
+        ours.append(scratch("matpreview", f"pt-{seed}.exr"))
+        seconds, _ = vcm_render(vcm, ["--scene", path, "-a", "pt", "-i", str(spp), "--seed", str(seed), "--quiet"],
+                                ours[-1])
+        ours_times.append(seconds)
+    rows = []
+    for name, paths, times in (("Mitsuba 3 `path`", theirs, theirs_times), ("ours `pt`", ours, ours_times)):
+        rows.append((name, f"{spp} spp", statistics.mean(times), variance_across(mi, paths)))
+    log(f"matpreview: {rows}")
+    return rows
+
+
+# ---------------------------------------------------------------------------------------------
+# SmallVCM.
+
+
+def smallvcm_binary(source):
+    binary = os.path.join(CACHE, "bin", "smallvcm")
+    if os.path.exists(binary):
+        return binary
+    if source is None:
+        source = os.path.join(CACHE, "SmallVCM")
+        if not os.path.isdir(source):
+            log(f"cloning {SMALLVCM_URL} into {source}")
+            clone = subprocess.run(["git", "clone", "--quiet", "--depth", "1", SMALLVCM_URL, source],
+                                   capture_output=True, text=True)
+            if clone.returncode != 0:
+                raise Skip(f"SmallVCM's source is not available (git clone failed: {clone.stderr.strip()}); "
+                           "give a checkout with --smallvcm-src")
+    main = os.path.join(source, "src", "smallvcm.cxx")
+    if not os.path.exists(main):
+        raise Skip(f"{main} does not exist: --smallvcm-src must be a SmallVCM checkout")
+    if shutil.which("g++") is None:
+        raise Skip("g++ is not installed (apt-get install g++)")
+    log("building SmallVCM with g++ -O3 -fopenmp")
+    os.makedirs(os.path.dirname(binary), exist_ok=True)
+    run(["g++", "-O3", "-fopenmp", "-std=c++11", "-o", binary, main])
+    return binary
+
+
+def smallvcm_run(binary, arguments, output):
+    start = time.perf_counter()
+    run([binary] + arguments + ["-o", output], cwd=CACHE)
+    return time.perf_counter() - start
+
+
+def smallvcm(vcm, settings, source):
+    binary = smallvcm_binary(source)
+    iterations, equal, reference_iterations = settings["iterations"], settings["equal_seconds"], settings["reference"]
+    timing, quality = [], []
+    for index, name in enumerate(SMALLVCM_SCENES):
+        row = [f"{index} {name}"]
+        for algorithm in ("vcm", "bpt", "pt"):
+            theirs = smallvcm_run(binary, ["-s", str(index), "-a", algorithm, "-i", str(iterations)],
+                                  scratch("smallvcm", f"{algorithm}-{index}-theirs.hdr"))
+            _, ours = vcm_render(vcm, ["--scene", str(index), "-a", algorithm, "-i", str(iterations),
+                                       "-r", "512x512", "--quiet"], scratch("smallvcm", f"{algorithm}-{index}-ours.exr"))
+            row.append((ours, theirs))
+            log(f"SmallVCM scene {index} {algorithm}: ours {ours:.2f} s, SmallVCM {theirs:.2f} s")
+        timing.append(row)
+        reference = scratch("smallvcm", f"reference-{index}-{reference_iterations}.hdr")
+        if not os.path.exists(reference):
+            log(f"SmallVCM reference of scene {index}: {reference_iterations} iterations of vcm (cached)")
+            smallvcm_run(binary, ["-s", str(index), "-a", "vcm", "-i", str(reference_iterations)], reference)
+        theirs_image = scratch("smallvcm", f"equal-{index}-theirs.hdr")
+        smallvcm_run(binary, ["-s", str(index), "-a", "vcm", "-t", str(equal)], theirs_image)
+        ours_image = scratch("smallvcm", f"equal-{index}-ours.exr")
+        vcm_render(vcm, ["--scene", str(index), "-a", "vcm", "-t", str(equal), "-r", "512x512", "--quiet"], ours_image)
+        quality.append((f"{index} {name}", rel_mse(vcm, ours_image, reference), rel_mse(vcm, theirs_image, reference)))
+    return timing, quality
+
+
+# ---------------------------------------------------------------------------------------------
+# Tables.
+
+
+def tables(results, settings, commands, stamp):
+    out = [stamp(commands, script="scripts/peer-bench.py"), ""]
+    if "cornell" in results:
+        rows = results["cornell"]
+        base = rows[0][3]
+        out += ["**Mitsuba's Cornell box, equal time** (relMSE against Mitsuba's 832-spp reference; "
+                f"mean of {settings['seeds']} seeds; ratio = ours / Mitsuba 3, below 1 is better):", "",
+                "| renderer | budget | seconds | relMSE | ratio |", "|---|---|---|---|---|"]
+        out += [f"| {n} | {b} | {s:.2f} | {e:.3g} | {e / base:.2f} |" for n, b, s, e in rows]
+        out.append("")
+    if "matpreview" in results:
+        (_, spp, ts, vs), (_, _, to, vo) = results["matpreview"]
+        out += [f"**matpreview, {spp}** (per-pixel variance over {settings['matpreview_renders']} seeds × "
+                "seconds per image; ratio = ours / Mitsuba 3):", "",
+                "| renderer | seconds | variance | variance × seconds |", "|---|---|---|---|",
+                f"| Mitsuba 3 `path` | {ts:.2f} | {vs:.3g} | {vs * ts:.3g} |",
+                f"| ours `pt` | {to:.2f} | {vo:.3g} | {vo * to:.3g} (**{vo * to / (vs * ts):.2f}×**) |", ""]
+    if "smallvcm" in results:
+        timing, quality = results["smallvcm"]
+        out += [f"**SmallVCM's scenes, 512², {settings['iterations']} iterations, wall time of the whole process** "
+                "(ours / SmallVCM; target for vcm ≤ 0.4):", "",
+                "| scene | vcm ours / SmallVCM s | ratio | bpt ours / SmallVCM s | ratio | pt ours / SmallVCM s | ratio |",
+                "|---|---|---|---|---|---|---|"]
+        for row in timing:
+            cells = "".join(f" {o:.2f} / {t:.2f} | {o / t:.2f} |" for o, t in row[1:])
+            out.append(f"| {row[0]} |{cells}")
+        out += ["", f"**VCM at equal time ({settings['equal_seconds']} s)**, relMSE against a "
+                f"{settings['reference']}-iteration SmallVCM `vcm` render (target ≤ 0.5):", "",
+                "| scene | ours | SmallVCM | ratio |", "|---|---|---|---|"]
+        out += [f"| {n} | {o:.3g} | {t:.3g} | {o / t:.2f} |" for n, o, t in quality]
+    return "\n".join(out).rstrip()
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="tiny settings, to check the pipeline")
+    parser.add_argument("--only", choices=["mitsuba", "smallvcm"])
+    parser.add_argument("--smallvcm-src", help="a SmallVCM checkout (else it is cloned into target/peer-bench)")
+    parser.add_argument("--update", action="store_true", help="rewrite the peers table of docs/performance.md")
+    parser.add_argument("--vcm", default=os.path.join(ROOT, "target", "release", "vcm"))
+    args = parser.parse_args()
+    if not in_venv():
+        bootstrap()
+    if not os.access(args.vcm, os.X_OK):
+        fail(f"'{args.vcm}' is not an executable: run cargo build --release first")
+    settings = {"cornell_spp": 256, "seeds": 3, "matpreview_spp": 16, "matpreview_renders": 4,
+                "iterations": 8, "equal_seconds": 10, "reference": 320}
+    if args.quick:
+        settings = {"cornell_spp": 8, "seeds": 1, "matpreview_spp": 2, "matpreview_renders": 2,
+                    "iterations": 1, "equal_seconds": 1, "reference": 4}
+    flags = " --quick" if args.quick else ""
+    commands = [f"scripts/peer-bench.py{flags}" + (f" --only {args.only}" if args.only else "")]
+    results, skipped = {}, []
+    jobs = [("cornell", "mitsuba", lambda: mitsuba_cornell(args.vcm, settings)),
+            ("matpreview", "mitsuba", lambda: mitsuba_matpreview(args.vcm, settings)),
+            ("smallvcm", "smallvcm", lambda: smallvcm(args.vcm, settings, args.smallvcm_src))]
+    for name, peer, job in jobs:
+        if args.only not in (None, peer):
+            continue
+        try:
+            results[name] = job()
+        except Skip as reason:
+            skipped.append(f"{name}: SKIPPED: {reason}")
+    helpers = perf_tables()
+    text = tables(results, settings, commands, helpers.stamp)
+    if skipped:
+        text += "\n\n" + "\n".join(f"- {s}" for s in skipped)
+    print(text)
+    with open(scratch("peers.md"), "w") as f:
+        f.write(text + "\n")
+    if args.update:
+        if args.quick or skipped:
+            fail("--update needs the full settings and every peer (not --quick, nothing skipped)")
+        os.chdir(ROOT)
+        helpers.replace_between("docs/performance.md", "peers", text)
+    sys.exit(1 if skipped else 0)
+
+
+if __name__ == "__main__":
+    main()
