@@ -188,14 +188,18 @@ impl<S: SpectralMode> LightVertex<S> {
             fixed: octahedral::encode(data.fixed),
             packed,
         };
+        let normal = octahedral::encode(data.normal);
+        // Without a shading normal both are the same vector: one encoding (the most frequent case).
+        let shading_normal =
+            if data.shading_normal == data.normal { normal } else { octahedral::encode(data.shading_normal) };
         Self {
             record,
             material: data.material,
-            normal: octahedral::encode(data.normal),
-            shading_normal: octahedral::encode(data.shading_normal),
+            normal,
+            shading_normal,
             texture: match (data.attribute, data.tangent) {
                 (Some(value), _) => pack_rgb(value),
-                (None, Some(tangent)) => pack_uv_angle(data.uv, tangent_angle(data.shading_normal, tangent)),
+                (None, Some(tangent)) => pack_uv_angle(data.uv, tangent_angle(shading_normal, tangent)),
                 (None, None) => [data.uv.x.to_bits(), data.uv.y.to_bits()],
             },
         }
@@ -258,12 +262,12 @@ fn pack_continuation(probability: f32) -> u32 {
     magnitude.saturating_add(1 << (CONTINUATION_DROPPED_BITS - 1)).min(0x7f80_0000) >> CONTINUATION_DROPPED_BITS
 }
 
-/// The angle of `tangent` about the shading normal `normal` as decoded from its octahedral
-/// code, from the `x` axis of `Frame::from_z` of that normal, as a fraction of a turn in
-/// 16 bits (0 when the tangent is parallel to the normal).
+/// The angle of `tangent` about the shading normal decoded from its octahedral code
+/// `normal_code`, from the `x` axis of `Frame::from_z` of that normal, as a fraction of a turn
+/// in 16 bits (0 when the tangent is parallel to the normal).
 #[inline]
-fn tangent_angle(normal: Vec3, tangent: Vec3) -> u16 {
-    let frame = Frame::from_z(octahedral::decode(octahedral::encode(normal)));
+fn tangent_angle(normal_code: u32, tangent: Vec3) -> u16 {
+    let frame = Frame::from_z(octahedral::decode(normal_code));
     let angle = tangent.dot(frame.y).atan2(tangent.dot(frame.x));
     let turns = if angle.is_finite() { angle / std::f32::consts::TAU } else { 0.0 };
     ((turns * 65536.0).round() as i32).rem_euclid(65536) as u16
@@ -558,7 +562,7 @@ mod tests {
             let along = frame.x * phi.cos() + frame.y * phi.sin() + normal * (2.0 * rng.uniform() - 1.0);
             let tangent = along * (0.1 + 3.0 * rng.uniform());
             let uv = Vec2::new(rng.uniform() * 4.0 - 1.0, rng.uniform() * 30.0);
-            let angle = tangent_angle(normal, tangent);
+            let angle = tangent_angle(octahedral::encode(normal), tangent);
             let (back_uv, back_angle) = unpack_uv_angle(pack_uv_angle(uv, angle));
             assert_eq!(back_angle, angle);
             for (a, b) in [(uv.x, back_uv.x), (uv.y, back_uv.y)] {
