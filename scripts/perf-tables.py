@@ -7,8 +7,10 @@ memory guard's estimate), then rewrites the text between marker comments:
 
     <!-- perf-table:NAME:begin --> ... <!-- perf-table:NAME:end -->
 
-NAME is `readme` in README.md and `algorithms`, `memory` in docs/performance.md (`peers`, the
-comparison with Mitsuba 3 and SmallVCM, is written by scripts/peer-bench.py).
+NAME is `readme` in README.md and `algorithms`, `memory`, `scaling` in docs/performance.md
+(`peers`, the comparison with Mitsuba 3 and SmallVCM, is written by scripts/peer-bench.py).
+`scaling` (VCM's time per iteration from 256² to 4096² in each radius mode; about 6 minutes) is
+made only when asked for with --tables.
 Every table is stamped with the date, commit, machine (CPU model, cores) and the exact
 commands. Python 3 standard library only.
 
@@ -152,6 +154,41 @@ def memory_table(rows, commands):
     return "\n".join(out)
 
 
+SCALING_SIDES = [256, 512, 1024, 2048, 4096]
+# The fixed radius's merging grows like pixels²: 4096² would take minutes per iteration.
+SCALING_LARGEST = {"global": 4096, "per-pixel": 4096, "fixed": 2048}
+
+
+def scaling_table(vcm):
+    commands, cells = [], {}
+    for mode, largest in SCALING_LARGEST.items():
+        for side in (s for s in SCALING_SIDES if s <= largest):
+            arguments = ["-s", "1", "-a", "vcm", "-i", "1", "-r", f"{side}x{side}", "--radius-mode", mode]
+            commands.append(" ".join([vcm, "bench"] + arguments))
+            [row] = bench(vcm, arguments)
+            cells[(mode, side)] = row
+    out = [
+        stamp(commands[:1] + ["... for each mode and size"]),
+        "VCM on scene 1, wall milliseconds per iteration (2 threads) and, in brackets, the ratio to the "
+        "previous size (4× the pixels: 4.0 is linear cost); peak RSS MiB.",
+        "",
+        "| pixels | " + " | ".join(f"`{m}` ms | `{m}` MiB" for m in SCALING_LARGEST) + " |",
+        "|---" * (1 + 2 * len(SCALING_LARGEST)) + "|",
+    ]
+    for side in SCALING_SIDES:
+        line = f"| {side}² |"
+        for mode in SCALING_LARGEST:
+            row = cells.get((mode, side))
+            if row is None:
+                line += " – | – |"
+                continue
+            previous = cells.get((mode, side // 2))
+            ratio = f" (×{row['ms'] / previous['ms']:.1f})" if previous else ""
+            line += f" {row['ms']:.0f}{ratio} | {mib(row['peak_kib'])} |"
+        out.append(line)
+    return "\n".join(out)
+
+
 def replace_between(path, name, text):
     with open(path) as f:
         content = f.read()
@@ -178,7 +215,7 @@ def main():
                         help="which tables to regenerate (comma-separated)")
     args = parser.parse_args()
     tables = set(args.tables.split(","))
-    unknown = tables - {"readme", "algorithms", "memory"}
+    unknown = tables - {"readme", "algorithms", "memory", "scaling"}
     if unknown:
         fail(f"unknown tables: {', '.join(sorted(unknown))}")
     if not args.no_build:
@@ -197,6 +234,8 @@ def main():
             replace_between(args.performance, "algorithms", algorithms_table(timing, [timing_command]))
     if "memory" in tables:
         memory_table_update(vcm, args)
+    if "scaling" in tables:
+        replace_between(args.performance, "scaling", scaling_table(vcm))
     print(f"perf-tables: rewrote {', '.join(sorted(tables))} in {args.readme} and {args.performance}")
 
 

@@ -18,7 +18,7 @@ use render::RenderSettings;
 use render::driver::Budget;
 use scene::cornell::BUILTIN_SCENES;
 
-use crate::{AlgorithmName, LoadedScene, load_scene, parse_resolution};
+use crate::{AlgorithmName, LoadedScene, RadiusModeName, load_scene, parse_resolution};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -43,6 +43,9 @@ pub struct BenchArgs {
     /// Spectral rendering (four hero-rotated wavelengths per path).
     #[arg(long)]
     spectral: bool,
+    /// Merging radius of the VCM engine's algorithms (as `vcm render --radius-mode`).
+    #[arg(long, value_enum, default_value_t = RadiusModeName::Global)]
+    radius_mode: RadiusModeName,
     /// Time the acceleration structure instead: BVH build and Mrays/s (closest hit and shadow
     /// rays, one thread and all) on each scene's geometry.
     #[arg(long)]
@@ -109,6 +112,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             if args.spectral {
                 command.arg("--spectral");
             }
+            command.args(["--radius-mode", args.radius_mode.name()]);
             let output = command.output().with_context(|| format!("cannot run '{}'", exe.display()))?;
             eprint!("{}", String::from_utf8_lossy(&output.stderr));
             if !output.status.success() {
@@ -131,6 +135,7 @@ fn child(args: &BenchArgs, source: &session::SceneSource, name: AlgorithmName) -
         max_length: file_max_length.unwrap_or(RenderSettings::default().max_length),
         memory_efficient: args.memory_efficient,
         spectral: args.spectral,
+        radius_mode: args.radius_mode.mode(),
         // As `vcm render` without --variance or a checkpoint.
         variance: false,
         ..RenderSettings::default()

@@ -76,11 +76,30 @@ impl AlgorithmName {
 
 /// `--radius-mode` values.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum RadiusModeName {
-    /// `--radius-factor` times the scene's bounding-sphere radius.
+pub(crate) enum RadiusModeName {
+    /// `--radius-factor` times the scene's bounding-sphere radius, shrunk by √(512² / pixels)
+    /// above 512² pixels: merging costs the same per pixel at every resolution.
     Global,
+    /// `--radius-factor` times the scene's bounding-sphere radius at every resolution.
+    Fixed,
     /// The pixel's footprint at the first surface it sees.
     PerPixel,
+}
+
+impl RadiusModeName {
+    /// The engine's mode.
+    pub(crate) fn mode(self) -> RadiusMode {
+        match self {
+            Self::Global => RadiusMode::Global,
+            Self::Fixed => RadiusMode::Fixed,
+            Self::PerPixel => RadiusMode::PerPixel,
+        }
+    }
+
+    /// The command line's name (and the checkpoints').
+    pub(crate) fn name(self) -> &'static str {
+        session::radius_mode_name(self.mode())
+    }
 }
 
 #[derive(Args)]
@@ -121,7 +140,8 @@ struct RenderArgs {
     /// Merging radius reduction: r_i = r_0 * (i+1)^((alpha-1)/2), 0 < alpha <= 1.
     #[arg(long, value_name = "ALPHA", default_value_t = 0.75)]
     radius_alpha: f32,
-    /// Merging radius: one for the image, or per pixel from its footprint (tech report §6.1).
+    /// Merging radius: one for the image (scaled with the resolution above 512², or fixed), or
+    /// per pixel from its footprint (tech report §6.1).
     #[arg(long, value_enum, default_value_t = RadiusModeName::Global)]
     radius_mode: RadiusModeName,
     /// Memory-efficient progressive VCM (tech report §6.2): merge with the previous
@@ -288,10 +308,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         seed: args.seed,
         radius_factor: args.radius_factor,
         radius_alpha: args.radius_alpha,
-        radius_mode: match args.radius_mode {
-            RadiusModeName::Global => RadiusMode::Global,
-            RadiusModeName::PerPixel => RadiusMode::PerPixel,
-        },
+        radius_mode: args.radius_mode.mode(),
         memory_efficient: args.memory_efficient,
         spectral: args.spectral,
         threads: args.threads,

@@ -58,8 +58,9 @@ impl Options {
         request.spectral = self.spectral;
         request.radius_factor = self.radius_factor.unwrap_or(request.radius_factor);
         request.radius_alpha = self.radius_alpha.unwrap_or(request.radius_alpha);
-        request.radius_mode = session::radius_mode_from_name(&self.radius_mode)
-            .ok_or_else(|| anyhow!("unknown radius_mode '{}': expected 'global' or 'per-pixel'", self.radius_mode))?;
+        request.radius_mode = session::radius_mode_from_name(&self.radius_mode).ok_or_else(|| {
+            anyhow!("unknown radius_mode '{}': expected 'global', 'fixed' or 'per-pixel'", self.radius_mode)
+        })?;
         request.memory_efficient = self.memory_efficient;
         request.russian_roulette = RussianRoulette::from_name(&self.rr_depth)
             .ok_or_else(|| anyhow!("rr_depth: expected a bounce number >= 1 or 'albedo', got '{}'", self.rr_depth))?;

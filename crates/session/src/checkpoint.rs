@@ -43,7 +43,7 @@ pub struct Recorded {
     pub radius_factor: f32,
     /// Radius alpha.
     pub radius_alpha: f32,
-    /// `global` or `per-pixel`.
+    /// `global`, `fixed` or `per-pixel`.
     pub radius_mode: String,
     /// Memory-efficient mode.
     pub memory_efficient: bool,

@@ -120,10 +120,12 @@ impl Request {
     }
 }
 
-/// The command line's name of a radius mode (`global`, `per-pixel`), as checkpoints record it.
+/// The command line's name of a radius mode (`global`, `fixed`, `per-pixel`), as checkpoints
+/// record it.
 pub fn radius_mode_name(mode: RadiusMode) -> &'static str {
     match mode {
         RadiusMode::Global => "global",
+        RadiusMode::Fixed => "fixed",
         RadiusMode::PerPixel => "per-pixel",
     }
 }
@@ -132,6 +134,7 @@ pub fn radius_mode_name(mode: RadiusMode) -> &'static str {
 pub fn radius_mode_from_name(name: &str) -> Option<RadiusMode> {
     match name {
         "global" => Some(RadiusMode::Global),
+        "fixed" => Some(RadiusMode::Fixed),
         "per-pixel" => Some(RadiusMode::PerPixel),
         _ => None,
     }

@@ -78,7 +78,7 @@ pub struct MemoryEstimate {
 pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstimate {
     let light_paths = scene.camera.pixel_count();
     let techniques = Techniques::of(settings.algorithm);
-    let radius = settings.radius_factor * scene.bounding_sphere.radius;
+    let radius = super::base_radius(scene, settings);
     let it = Iteration {
         constants: MisConstants::new(light_paths, radius.max(1e-7), techniques.connect, techniques.merge),
         max_length: settings.max_length,

@@ -195,13 +195,40 @@ impl FamilyValues {
 /// How the merging radius is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RadiusMode {
-    /// One radius for the whole image: `radius_factor` × the scene's bounding-sphere radius.
+    /// One radius for the whole image: `radius_factor` × the scene's bounding-sphere radius up
+    /// to [`RADIUS_REFERENCE_PIXELS`] pixels, shrunk by √(reference / pixels) above, so the
+    /// expected number of light vertices a merge query finds stays that of a 512² image and an
+    /// iteration's cost grows linearly with the pixel count ([`base_radius`]).
     Global,
+    /// One radius for the whole image at every resolution: `radius_factor` × the scene's
+    /// bounding-sphere radius. Merge queries find more light vertices as the pixel count grows
+    /// (the cost of merging grows like pixels²), with the bias of a radius that spans more
+    /// pixels.
+    Fixed,
     /// Per pixel (§6.1): the radius of a disc with the area of the pixel's footprint at the
     /// first surface its centre sees (the global radius where it sees nothing). The light
     /// vertices carry the radius-free cVC, cVM, and every full path is weighted with the radius
     /// of its pixel, so the weights of all its techniques still sum to one.
     PerPixel,
+}
+
+/// The pixel count up to which [`RadiusMode::Global`] uses the scene-relative radius unscaled
+/// (512², the resolution of SmallVCM's scenes, on which the default radius factor was chosen).
+pub const RADIUS_REFERENCE_PIXELS: u64 = 512 * 512;
+
+/// The merging radius of the first iteration (world units) before the per-pixel footprints:
+/// `radius_factor` × the scene's bounding-sphere radius, times √([`RADIUS_REFERENCE_PIXELS`] /
+/// pixels) above the reference pixel count in [`RadiusMode::Global`]. (N_L light sub-paths, one
+/// per pixel, over a disc of radius r: a query finds on average ∝ N_L r² light vertices, which
+/// this scaling keeps constant.)
+pub fn base_radius(scene: &Scene, settings: &VcmSettings) -> f32 {
+    let radius = settings.radius_factor * scene.bounding_sphere.radius;
+    let pixels = scene.camera.pixel_count() as u64;
+    if settings.radius_mode == RadiusMode::Global && pixels > RADIUS_REFERENCE_PIXELS {
+        radius * (RADIUS_REFERENCE_PIXELS as f64 / pixels as f64).sqrt() as f32
+    } else {
+        radius
+    }
 }
 
 /// Settings of the engine.
@@ -215,7 +242,7 @@ pub struct VcmSettings {
     pub radius_factor: f32,
     /// Radius reduction α: r_i = r_0 · (i+1)^((α−1)/2).
     pub radius_alpha: f32,
-    /// Global or per-pixel radius.
+    /// Global (resolution-scaled), fixed or per-pixel radius.
     pub radius_mode: RadiusMode,
     /// Memory-efficient mode (after §6.2): only 44-byte merging records of the light vertices are
     /// kept; each pixel traces its light sub-path again right before its camera sub-path and
@@ -452,7 +479,7 @@ type RowResult = (Vec<Splat>, Vec<FamilyValues>, RejectedCounts);
 impl<S: SpectralMode> Engine<S> {
     /// An engine for `scene`.
     fn new(scene: &Scene, settings: VcmSettings) -> Self {
-        let base_radius = settings.radius_factor * scene.bounding_sphere.radius;
+        let base_radius = base_radius(scene, &settings);
         let pixel_footprints =
             (settings.radius_mode == RadiusMode::PerPixel).then(|| pixel_footprints(scene, base_radius));
         Self {
@@ -1000,6 +1027,24 @@ fn pixel_footprints(scene: &Scene, fallback: f32) -> Vec<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn global_radius_keeps_the_expected_vertices_per_query_above_512_squared() {
+        let settings = |mode| VcmSettings { radius_mode: mode, ..VcmSettings::new(VcmAlgorithm::VertexConnectionMerging) };
+        let radius = |w: u32, h: u32, mode| base_radius(&scene::cornell::build(0, w, h).unwrap(), &settings(mode));
+        let unscaled = radius(64, 64, RadiusMode::Fixed);
+        assert!(unscaled > 0.0);
+        // Up to 512² pixels (and for the fixed mode everywhere) the scene-relative radius.
+        for (w, h) in [(64, 64), (512, 512), (1024, 256)] {
+            assert_eq!(radius(w, h, RadiusMode::Global), unscaled, "{w}x{h}");
+        }
+        for (w, h) in [(1024, 1024), (4096, 2048)] {
+            assert_eq!(radius(w, h, RadiusMode::Fixed), unscaled);
+        }
+        // N_L r² constant: 4x the pixels, half the radius; 32x the pixels, 1/√32.
+        assert!((radius(1024, 1024, RadiusMode::Global) / unscaled - 0.5).abs() < 1e-6);
+        assert!((radius(4096, 2048, RadiusMode::Global) / unscaled - 32f32.sqrt().recip()).abs() < 1e-6);
+    }
 
     #[test]
     fn non_finite_estimates_are_counted_per_family_and_never_added() {
