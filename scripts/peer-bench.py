@@ -13,7 +13,9 @@ What it measures (issue #13's table; every figure is a ratio of two runs made mi
    the seconds that image took, Mitsuba `path` against our `pt` with 16 iterations.
 3. SmallVCM (built from its public source with `g++ -O3 -fopenmp`), its four scenes at 512x512:
    the wall time of the whole process for ITERATIONS iterations of `vcm`, `bpt` and `pt`, and
-   `vcm`'s relMSE after EQUAL seconds against a REFERENCE-iteration SmallVCM `vcm` render (cached).
+   `vcm`'s relMSE after EQUAL seconds against a REFERENCE-iteration `vcm` render of ours with
+   another seed (cached; its noise is part of both errors). Not SmallVCM's own: it has no seed
+   option, so its equal-time render would repeat the first iterations of its reference.
 
 Render times are the renderers' own (Mitsuba: `mi.render` until the image is in memory; ours: the
 summary line's render time, which excludes loading), except for SmallVCM's table, which times
@@ -50,6 +52,8 @@ SHARED = os.path.join(os.path.dirname(ROOT), "shared", "scenes", "mitsuba")
 ALGORITHMS = ["pt", "lt", "ppm", "bpm", "bpt", "vcm"]
 SMALLVCM_SCENES = ["cornell-sun", "cornell-area-mirror", "cornell-point", "cornell-env"]
 SMALLVCM_URL = "https://github.com/SmallVCM/SmallVCM"
+# The seed of the equal-time reference, independent of the default seed (0) of the test renders.
+REFERENCE_SEED = 1000
 
 
 def perf_tables():
@@ -270,10 +274,12 @@ def smallvcm(vcm, settings, source):
             row.append((ours, theirs))
             log(f"SmallVCM scene {index} {algorithm}: ours {ours:.2f} s, SmallVCM {theirs:.2f} s")
         timing.append(row)
-        reference = scratch("smallvcm", f"reference-{index}-{reference_iterations}.hdr")
+        reference = scratch("smallvcm", f"reference-{index}-{reference_iterations}.exr")
         if not os.path.exists(reference):
-            log(f"SmallVCM reference of scene {index}: {reference_iterations} iterations of vcm (cached)")
-            smallvcm_run(binary, ["-s", str(index), "-a", "vcm", "-i", str(reference_iterations)], reference)
+            log(f"reference of scene {index}: {reference_iterations} iterations of our vcm, seed {REFERENCE_SEED} (cached)")
+            vcm_render(vcm, ["--scene", str(index), "-a", "vcm", "-i", str(reference_iterations), "-r", "512x512",
+                             "--seed", str(REFERENCE_SEED), "--quiet"], reference + ".part.exr")
+            os.replace(reference + ".part.exr", reference)
         theirs_image = scratch("smallvcm", f"equal-{index}-theirs.hdr")
         smallvcm_run(binary, ["-s", str(index), "-a", "vcm", "-t", str(equal)], theirs_image)
         ours_image = scratch("smallvcm", f"equal-{index}-ours.exr")
@@ -313,7 +319,8 @@ def tables(results, settings, commands, stamp):
             cells = "".join(f" {o:.2f} / {t:.2f} | {o / t:.2f} |" for o, t in row[1:])
             out.append(f"| {row[0]} |{cells}")
         out += ["", f"**VCM at equal time ({settings['equal_seconds']} s)**, relMSE against a "
-                f"{settings['reference']}-iteration SmallVCM `vcm` render (target ≤ 0.5):", "",
+                f"{settings['reference']}-iteration `vcm` render of ours with seed {REFERENCE_SEED} "
+                "(target ≤ 0.5):", "",
                 "| scene | ours | SmallVCM | ratio |", "|---|---|---|---|"]
         out += [f"| {n} | {o:.3g} | {t:.3g} | {o / t:.2f} |" for n, o, t in quality]
     return "\n".join(out).rstrip()
@@ -332,7 +339,7 @@ def main():
     if not os.access(args.vcm, os.X_OK):
         fail(f"'{args.vcm}' is not an executable: run cargo build --release first")
     settings = {"cornell_spp": 256, "seeds": 3, "matpreview_spp": 16, "matpreview_renders": 4,
-                "iterations": 8, "equal_seconds": 10, "reference": 320}
+                "iterations": 8, "equal_seconds": 10, "reference": 256}
     if args.quick:
         settings = {"cornell_spp": 8, "seeds": 1, "matpreview_spp": 2, "matpreview_renders": 2,
                     "iterations": 1, "equal_seconds": 1, "reference": 4}
