@@ -22,6 +22,7 @@ mod error;
 mod exr_file;
 mod gz;
 mod linear_image;
+mod loop_subdivision;
 mod options;
 mod pfm;
 mod srgb;

@@ -304,6 +304,33 @@ fn bilinear_patches_become_two_triangles() {
 }
 
 #[test]
+fn loop_subdivision_surfaces_are_refined_at_load() {
+    // A tetrahedron, translated: levels 2 make 4 · 16 triangles; the limit surface lies inside
+    // the control tetrahedron (around its centre, here (5, 0, 0)) and every normal points away
+    // from the centre.
+    let tetrahedron = "\"point3 P\" [1 1 1 1 -1 -1 -1 1 -1 -1 -1 1] \"integer indices\" [0 1 2 0 3 1 0 2 3 1 3 2]";
+    let d = load_ok(
+        "loopsubdiv",
+        &format!("{HEADER}Translate 5 0 0\nShape \"loopsubdiv\" \"integer levels\" 2 {tetrahedron}\n"),
+    );
+    let m = mesh(&d, 0);
+    assert_eq!(m.triangles.len(), 64);
+    assert_eq!(m.normals.len(), m.positions.len());
+    let centre = Vec3::new(5.0, 0.0, 0.0);
+    for (p, n) in m.positions.iter().zip(&m.normals) {
+        assert!((*p - centre).length() < 3f32.sqrt() && n.dot(*p - centre) > 0.0, "{p} {n}");
+    }
+    // The default is 3 levels.
+    let d = load_ok("loopsubdiv_default", &format!("{HEADER}Shape \"loopsubdiv\" {tetrahedron}\n"));
+    assert_eq!(mesh(&d, 0).triangles.len(), 256);
+    let e = load_err(
+        "loopsubdiv_bad",
+        &format!("{HEADER}Shape \"loopsubdiv\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2 0 1 2]\n"),
+    );
+    assert!(e.contains("scene.pbrt:3:") && e.contains("non-manifold edge"), "{e}");
+}
+
+#[test]
 fn spheres_and_disks() {
     let text = format!(
         "{HEADER}AttributeBegin\n Translate 1 2 3\n Rotate 30 1 1 0\n Scale 2 2 2\n Shape \"sphere\" \"float radius\" 0.5\nAttributeEnd\n\

@@ -1362,7 +1362,8 @@ impl Builder {
                 let object = crate::cylinder::cylinder_mesh(radius, z0, z1, phi_max.to_radians());
                 Geometry::Mesh(self.to_world_mesh(file, d.pos, object)?)
             }
-            other @ ("curve" | "loopsubdiv" | "cone" | "paraboloid" | "hyperboloid") => {
+            "loopsubdiv" => Geometry::Mesh(self.to_world_mesh(file, d.pos, loop_subdivision_mesh(file, d)?)?),
+            other @ ("curve" | "cone" | "paraboloid" | "hyperboloid") => {
                 return Err(err(file, d.arg_pos[0], format!("shape \"{other}\" is not supported")));
             }
             other => return Err(err(file, d.arg_pos[0], format!("unknown shape type \"{other}\""))),
@@ -1599,6 +1600,34 @@ impl Builder {
         self.warn_unused(p);
         Ok(())
     }
+}
+
+/// pbrt's `loopsubdiv` shape (`integer levels`, default 3; `integer indices`; `point3 P`)
+/// refined at load ([`crate::loop_subdivision`]).
+fn loop_subdivision_mesh(file: &Path, d: &Directive) -> Result<MeshData, SceneError> {
+    let p = &d.params;
+    let Some((positions, _)) = p.numbers("P", &["point3"], 3)? else {
+        return Err(err(file, d.pos, "loopsubdiv needs \"point3 P\""));
+    };
+    let Some(indices) = p.ints("indices")? else {
+        return Err(err(file, d.pos, "loopsubdiv needs \"integer indices\""));
+    };
+    let ipos = p.find("indices").map_or(d.pos, |x| x.pos);
+    if indices.len() % 3 != 0 {
+        return Err(p.error(ipos, format!("{} indices is not a multiple of 3", indices.len())));
+    }
+    let levels = p.ints("levels")?.map_or(Ok(3), |v| match v.as_slice() {
+        [n] if *n >= 0 => Ok(*n as u32),
+        _ => Err(err(file, d.pos, "loopsubdiv: \"integer levels\" must be one number >= 0")),
+    })?;
+    let count = positions.len() / 3;
+    if let Some(bad) = indices.iter().find(|&&i| i < 0 || i as usize >= count) {
+        return Err(p.error(ipos, format!("index {bad} is out of range (there are {count} vertices)")));
+    }
+    let points: Vec<Vec3> = positions.chunks(3).map(|v| Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)).collect();
+    let triangles: Vec<[u32; 3]> = indices.chunks(3).map(|c| [c[0] as u32, c[1] as u32, c[2] as u32]).collect();
+    crate::loop_subdivision::subdivide(&points, &triangles, levels)
+        .map_err(|e| err(file, d.pos, format!("loopsubdiv: {e}")))
 }
 
 /// The radiance image of a `diffuse` area light (`filename`), times `scale`: 8-bit images
