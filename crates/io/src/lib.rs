@@ -17,6 +17,7 @@
 //! from their transfer function ([`TextureFile::linear`]). Scene files are
 //! loaded by [`load_scene`] / [`load_scene_with`] ([`mitsuba`], [`pbrt`]).
 
+mod curves;
 mod cylinder;
 mod error;
 mod exr_file;

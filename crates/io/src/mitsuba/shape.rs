@@ -3,6 +3,7 @@
 //! (shapes in their own space, referenced by id) placed by `instance` shapes with a
 //! `to_world` (see `scene::instance`).
 
+use crate::curves::{Basis, curve_mesh, read_curves};
 use math::{Vec2, Vec3};
 use scene::desc::{Geometry, InstanceDesc, MeshData, ObjectDesc, ShapeDesc};
 use scene::instance::Affine3A;
@@ -234,6 +235,25 @@ impl<'a> Loader<'a> {
                     axis_v: to_vec3(v),
                     flip_normals: flip != mirrored,
                 }
+            }
+            ty @ ("linearcurve" | "bsplinecurve") => {
+                let basis = if ty == "linearcurve" { Basis::Linear } else { Basis::BSpline };
+                let filename = p.string_required("filename")?.to_string();
+                let path = self.resolve_file(&filename, node)?;
+                let mut curves = read_curves(&path, basis).map_err(|e| p.error(e))?;
+                // Positions move with to_world; radii do not (Mitsuba's rule).
+                for point in curves.iter_mut().flatten() {
+                    point.0 = glam::DVec3::from(to_world.point(point.0.to_array()));
+                }
+                Geometry::Mesh(transform_mesh(
+                    curve_mesh(&curves, basis),
+                    &Mat4::IDENTITY,
+                    flip,
+                    false,
+                    &node.pos,
+                    &what,
+                    &mut self.warnings,
+                )?)
             }
             other => return Err(p.error(format!("unsupported shape type '{other}'"))),
         };
