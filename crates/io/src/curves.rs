@@ -258,7 +258,7 @@ mod tests {
         let scale = (0.5 * TAU / SIDES as f64) / (0.5 * TAU / SIDES as f64).sin();
         for p in &mesh.positions {
             let (z, rho) = (f64::from(p.z), f64::from(p.x).hypot(f64::from(p.y)));
-            let frustum = (z >= -1e-6 && z <= 4.0 + 1e-6) && (rho - (0.5 - 0.0625 * z) * scale).abs() < 1e-5;
+            let frustum = (-1e-6..=4.0 + 1e-6).contains(&z) && (rho - (0.5 - 0.0625 * z) * scale).abs() < 1e-5;
             let caps = (p.as_dvec3().length() - 0.5).abs() < 1e-5
                 || ((p.as_dvec3() - DVec3::new(0.0, 0.0, 4.0)).length() - 0.25).abs() < 1e-5;
             assert!(frustum || caps, "{p}");
