@@ -12,7 +12,8 @@
 //!   probability that depends on the fixed direction only;
 //! - a **non-delta mixture** of a GGX reflection lobe with the interface's α (rough
 //!   interfaces), a GGX lobe for the light that went through the coating to a conductor and
-//!   back (α widened by refraction: `√((η α_c)² + ((η − 1) α_t)²)`, clamped to [0.01, 1]) and
+//!   back (the spread inside, `√(α_c² + ((η − 1) α_t/η)²)`, magnified by the refraction out,
+//!   `η μ′/μ` at the fixed direction's cosines, clamped to [0.01, 1]) and
 //!   a cosine lobe (the diffuse base, the medium's scattering, and at least a tenth of the
 //!   mixture so that every direction with `f > 0` has a positive pdf). Its weights are
 //!   Fresnel- and transmittance-weighted estimates of each part's energy at the fixed
@@ -26,9 +27,9 @@
 //! deterministic, unbiased estimate):
 //!
 //! - smooth interface, diffuse base, no scattering (`albedo` 0):
-//!   `f = (1 − F(μo))(1 − F(μi)) Tr(μo′) Tr(μi′) ρ S / (π η²)`, with `Tr(μ′) = exp(−thickness/μ′)`
-//!   at the refracted cosines and `S = Σ_{k<K} (ρ r̄)^k`, `r̄ = ∫ F_inside(μ) Tr(μ)² 2μ dμ`
-//!   (tabulated per material), `K = ⌈maxdepth/2⌉`: the number of base bounces pbrt's walk
+//!   `f = (1 − F(μo))(1 − F(μi)) Tr(μo′) Tr(μi′) ρ S / (π η²)`, with
+//!   `Tr(μ′) = exp(−thickness/μ′)` at the refracted cosines and `S = Σ_{k<K} (ρ r̄)^k`,
+//!   `r̄ = ∫ F_inside(μ) Tr(μ)² 2μ dμ` (tabulated per material), `K = ⌈maxdepth/2⌉`: the number of base bounces pbrt's walk
 //!   reaches (its expectation is this truncated series; `maxdepth → ∞` gives `1/(1 − ρ r̄)`);
 //! - smooth interface over a smooth conductor: every unscattered path leaves in the mirror
 //!   direction, a delta lobe of weight `F + (1 − F)² a Σ_{k<K} (F a)^k` per channel with
@@ -64,8 +65,8 @@ use crate::texture::TexturePoint;
 pub(super) struct Coated {
     layers: Layers,
     moments: Moments,
-    /// The sampling lobe of the light that reached a conductor base (`None`: diffuse base, or
-    /// everything unscattered is in the delta lobe).
+    /// The angular spread (as GGX α) inside the layer of the light that reached a conductor
+    /// base (`None`: diffuse base, or everything unscattered is in the delta lobe).
     base_lobe: Option<Microfacet>,
 }
 
@@ -105,14 +106,15 @@ impl Coated {
                     }
                 };
                 let dist = ggx(*alpha_u, *alpha_v);
-                let widen = |a_c: f32, a_t: f32| {
+                // The spread inside the layer: the conductor's α, and a rough top's α bent by
+                // refraction (see `Coated::base_lobe_at` for the way out).
+                let inside = |a_c: f32, a_t: f32| {
                     let a_c = if dist.is_some() { a_c } else { 0.0 };
-                    let a_t = if top.dist.is_some() { a_t } else { 0.0 };
-                    ((eta * a_c).powi(2) + ((eta - 1.0) * a_t).powi(2)).sqrt().clamp(0.01, 1.0)
+                    let a_t = if top.dist.is_some() { a_t * (eta - 1.0) / eta } else { 0.0 };
+                    (a_c * a_c + a_t * a_t).sqrt()
                 };
-                let lobe = (dist.is_some() || top.dist.is_some()).then(|| {
-                    Microfacet::ggx(widen(*alpha_u, interface.alpha_u), widen(*alpha_v, interface.alpha_v))
-                });
+                let lobe = (dist.is_some() || top.dist.is_some())
+                    .then(|| Microfacet::ggx(inside(*alpha_u, interface.alpha_u), inside(*alpha_v, interface.alpha_v)));
                 (Base::Conductor { eta: ce / eta, k: ck / eta, dist }, lobe)
             }
         };
@@ -187,6 +189,17 @@ impl Coated {
         own + layers.estimate(wo, wi, &mut pair_rng(wo, wi))
     }
 
+    /// The sampling lobe outside of the light that reached a conductor base, for the fixed
+    /// direction `w`: the spread inside magnified by refraction, `dθ_out/dθ_in = η μ′/μ`
+    /// (μ, μ′ the outside and refracted cosines of `w`), clamped to [0.01, 1].
+    fn base_lobe_at(&self, w: Vec3) -> Option<Microfacet> {
+        let inside = self.base_lobe?;
+        let (_, refracted, _) = self.crossing(w.z);
+        let scale = self.layers.top.eta * refracted / w.z.max(1e-3);
+        let alpha = |a: f32| (a * scale).clamp(0.01, 1.0);
+        Some(Microfacet::ggx(alpha(inside.alpha_x), alpha(inside.alpha_y)))
+    }
+
     /// The largest channel of the base's reflectance seen at the refracted cosine.
     fn base_reflectance(&self, refracted: f32) -> Rgb {
         match self.layers.base {
@@ -220,7 +233,7 @@ impl Coated {
             _ => 0.0,
         };
         let sum = w.top * lobe(self.layers.top.dist.as_ref())
-            + w.base * lobe(self.base_lobe.as_ref())
+            + w.base * lobe(self.base_lobe_at(a).as_ref())
             + w.cosine * b.z * INV_PI;
         sum / w.total()
     }
@@ -305,8 +318,9 @@ impl LeafModel for Coated {
         }
         let w = self.weights(fixed);
         let pick = u[2] * w.total();
-        let glossy = |dist: &Microfacet| (micro_reflect(fixed, dist.sample_visible(fixed, [u[0], u[1]])), LobeKind::Glossy);
-        let (direction, kind) = match (self.layers.top.dist.as_ref(), self.base_lobe.as_ref()) {
+        let glossy =
+            |dist: &Microfacet| (micro_reflect(fixed, dist.sample_visible(fixed, [u[0], u[1]])), LobeKind::Glossy);
+        let (direction, kind) = match (self.layers.top.dist.as_ref(), self.base_lobe_at(fixed).as_ref()) {
             (Some(top), _) if pick < w.top => glossy(top),
             (_, Some(base)) if pick < w.top + w.base => glossy(base),
             _ => (math::warp::cosine_hemisphere([u[0], u[1]]), LobeKind::Diffuse),

@@ -113,3 +113,43 @@ fn walk_weights_of_pbrt_are_biased_under_a_rough_top() {
     assert!(apart(pbrt, ours) > Z && pbrt.0 > ours.0, "pbrt's weights are measurably too bright");
     assert!(apart(pbrt, pbrt_reversed) > Z, "pbrt's weights are not reciprocal");
 }
+
+/// A lossless medium over a perfect mirror under a smooth coating reflects everything: the
+/// delta lobe (exact) plus the walk's scattered part, integrated by cosine sampling (the walk
+/// estimate times π). pbrt's walk, which lacks the mirror chains, loses a quarter of it.
+#[test]
+fn pbrt_walk_loses_the_mirror_chains() {
+    let layer =
+        CoatingLayer { thickness: 0.7, albedo: Texture::Constant(Rgb::WHITE), g: -0.4, max_depth: 400, samples: 1 };
+    let mirror = CoatedBase::Conductor {
+        ior: ConductorIor::Complex { eta: Rgb::BLACK, k: Rgb::BLACK },
+        alpha_u: 0.0,
+        alpha_v: 0.0,
+    };
+    let m = model(0.0, layer, mirror);
+    let wo = at(10.0, 0.3);
+    let delta = m.delta_weight(wo).r as f64;
+    let n = 100_000u64;
+    let albedo = |pbrt: bool| {
+        let mut stats = (0.0f64, 0.0f64);
+        for i in 0..n {
+            let mut rng = Rng::for_stream(31, i, pbrt as u64);
+            let wi = math::warp::cosine_hemisphere(rng.uniform2());
+            let v = if pbrt {
+                m.layers.estimate_with_pbrt_weights(wo, wi, &mut rng)
+            } else {
+                m.layers.estimate(wo, wi, &mut rng)
+            };
+            let x = (v.r * math::PI) as f64;
+            stats.0 += x;
+            stats.1 += x * x;
+        }
+        let mean = stats.0 / n as f64;
+        (delta + mean, ((stats.1 / n as f64 - mean * mean) / n as f64).sqrt())
+    };
+    let (ours, ours_error) = albedo(false);
+    let (pbrt, pbrt_error) = albedo(true);
+    println!("albedo: ours {ours} ± {ours_error}, pbrt {pbrt} ± {pbrt_error}");
+    assert!((ours - 1.0).abs() <= Z * ours_error + 1e-4, "ours: {ours} ± {ours_error}");
+    assert!(pbrt < 0.8 && pbrt > 0.7, "pbrt: {pbrt} ± {pbrt_error}");
+}

@@ -158,7 +158,8 @@ impl Top {
         }
         let denominator = sqr(wi.dot(m) + cos_o / etap);
         let pdf = visible * wi.dot(m).abs() / denominator * pt / (pr + pt);
-        let ft = (1.0 - fresnel) * dist.d(m) * dist.g(wo, wi, m) * (wi.dot(m) * cos_o / (denominator * wi.z * wo.z)).abs();
+        let ft =
+            (1.0 - fresnel) * dist.d(m) * dist.g(wo, wi, m) * (wi.dot(m) * cos_o / (denominator * wi.z * wo.z)).abs();
         let ft = if radiance { ft / sqr(etap) } else { ft };
         Some(InterfaceSample { wi, f: Rgb::splat(ft), pdf })
     }

@@ -17,15 +17,22 @@
 //! expectation stops at `max_depth` events).
 //!
 //! **One deliberate difference from pbrt-v4.** A direction `y` inside the layer that leaves
-//! towards `wi` is produced by two strategies: the presampled exit (density
-//! `p_top(wi → y)`) and a bounce at a vertex (density `p_vertex`). pbrt weighs the bounce with
-//! the power heuristic against `p_top(y → wi)`, the density of sampling `wi` from `y`, which is
-//! not the density of the competing strategy; the two weights of one `y` then do not sum to one
-//! and pbrt's estimate under a rough interface is not reciprocal (measured on a rough diffuse coating: 6–8 % too bright, and
-//! 2 % apart between the two orders of a pair, `walk_weights_of_pbrt_are_biased_under_a_rough_top` in
-//! `coated_tests.rs`). We weigh the bounce against
-//! `p_top(wi → y)`, which makes the two weights sum to one. Under a smooth interface the two
-//! agree (no bounce leaves through a specular interface).
+//! towards `wi` is produced by two strategies: the presampled exit (density `p_top(wi → y)`)
+//! and a bounce at a vertex (density `p_vertex`). pbrt weighs the bounce with the power
+//! heuristic against `p_top(y → wi)`, the density of sampling `wi` from `y`, which is not the
+//! density of the competing strategy; the two weights of one `y` then do not sum to one, and
+//! pbrt's estimate under a rough interface is biased and not reciprocal (measured on a rough
+//! diffuse coating: 6–8 % too bright, and 2 % apart between the two orders of a pair;
+//! `walk_weights_of_pbrt_are_biased_under_a_rough_top` in `coated_tests.rs`). We weigh the
+//! bounce against `p_top(wi → y)`, which makes the two weights sum to one. Under a smooth
+//! interface the two agree (no bounce leaves through a specular interface).
+//!
+//! **A second one.** Between a smooth top and a smooth conductor, pbrt's walk connects a
+//! scattering vertex to the exit only straight up; the light that reaches the exit through
+//! mirror bounces (down to the conductor, or round trips between the two interfaces) cannot be
+//! sampled either, so pbrt loses it (measured: a lossless medium over a perfect mirror reflects
+//! 77 % instead of 100 %; `pbrt_walk_loses_the_mirror_chains` in `coated_tests.rs`). We add
+//! those chains in closed form (`Layers::mirror_chains`).
 
 use math::{Rng, Vec3};
 use spectrum::Rgb;
@@ -90,18 +97,46 @@ impl Layers {
         f / self.samples.max(1) as f32
     }
 
-    /// pbrt-v4's weighting of the bounces that leave through a rough top (see the module
-    /// documentation), for the test that measures its bias.
+    /// Between a smooth top and a smooth conductor, the paths from a scattering vertex at depth
+    /// `zp` (arrived along `w`) to the presampled exit direction `exit_in` (pointing down, into
+    /// the layer) through specular bounces only, beside the straight one the walk connects:
+    /// up and `k ≥ 1` round trips (top reflection, base reflection) before leaving, or first
+    /// down to the base and `k ≥ 0` round trips. The walk cannot sample these (every bounce is
+    /// a delta), so they are summed here, per channel, without the exit's weight:
+    /// `[p(u) Tr(thickness − zp) R + p(d) Tr(zp) F_c Tr(thickness)] / (1 − R)`,
+    /// `R = F_top F_c Tr(thickness)²`, `u = −exit_in` and `d` its mirror image.
+    fn mirror_chains(&self, phase: &HenyeyGreenstein, w: Vec3, zp: f32, exit_in: Vec3) -> Rgb {
+        let Base::Conductor { eta, k, dist: None } = self.base else { return Rgb::BLACK };
+        let up = -exit_in;
+        let down = Vec3::new(up.x, up.y, -up.z);
+        let conductor = crate::microfacet::fresnel_conductor_rgb(up.z, eta, k);
+        let top_reflection = super::fresnel::fresnel_dielectric(-up.z, self.top.eta);
+        let crossing = transmittance(self.thickness, up);
+        let round_trip = conductor * (top_reflection * crossing * crossing);
+        let first = round_trip * (phase.p(-w, up) * transmittance(self.thickness - zp, up))
+            + conductor * (phase.p(-w, down) * transmittance(zp, down) * crossing);
+        Rgb::new(first.r / (1.0 - round_trip.r), first.g / (1.0 - round_trip.g), first.b / (1.0 - round_trip.b))
+    }
+
+    /// pbrt-v4's walk: its weighting of the bounces that leave through a rough top, and
+    /// without the mirror chains (see the module documentation), for the tests that measure
+    /// the differences.
     #[cfg(test)]
     pub(super) fn estimate_with_pbrt_weights(&self, wo: Vec3, wi: Vec3, rng: &mut Rng) -> Rgb {
         self.walk(wo, wi, rng, true)
     }
 
     /// One walk; `pbrt_weights` weighs a bounce leaving through a rough top against the density
-    /// of sampling `wi` from the bounce direction (pbrt-v4) instead of the presampled exit's.
+    /// of sampling `wi` from the bounce direction instead of the presampled exit's and leaves
+    /// out the mirror chains, as pbrt-v4 does.
     fn walk(&self, wo: Vec3, wi: Vec3, rng: &mut Rng, pbrt_weights: bool) -> Rgb {
-        let exit_density =
-            |w: Vec3| if pbrt_weights { self.top.pdf(-w, wi, Events::Transmission) } else { self.top.pdf(wi, -w, Events::Transmission) };
+        let exit_density = |w: Vec3| {
+            if pbrt_weights {
+                self.top.pdf(-w, wi, Events::Transmission)
+            } else {
+                self.top.pdf(wi, -w, Events::Transmission)
+            }
+        };
         let (top, base, thickness) = (&self.top, &self.base, self.thickness);
         let phase = HenyeyGreenstein { g: self.g };
         let scattering = !self.albedo.is_black();
@@ -140,6 +175,9 @@ impl Layers {
                     let p = phase.p(-w, -exit.wi);
                     let weight = if top.is_specular() { 1.0 } else { power_heuristic(exit.pdf, p) };
                     f += beta * self.albedo * exit_weight * (p * weight * transmittance(zp - thickness, exit.wi));
+                    if top.is_specular() && base.is_specular() && !pbrt_weights {
+                        f += beta * self.albedo * exit_weight * self.mirror_chains(&phase, w, zp, exit.wi);
+                    }
                     let (next, pdf) = phase.sample(-w, rng.uniform2());
                     if pdf <= 0.0 || next.z == 0.0 {
                         continue;
@@ -185,11 +223,7 @@ impl Layers {
                 if !top.is_specular() {
                     let f_exit = top.f(-w, wi, true);
                     if f_exit > 0.0 {
-                        let weight = if base.is_specular() {
-                            1.0
-                        } else {
-                            power_heuristic(s.pdf, exit_density(w))
-                        };
+                        let weight = if base.is_specular() { 1.0 } else { power_heuristic(s.pdf, exit_density(w)) };
                         f += beta * (transmittance(thickness, w) * f_exit * weight);
                     }
                 }
