@@ -176,6 +176,13 @@ fn sampled_and_evaluated_agree_pdfs_swap_and_the_adjoint_is_exact() {
                     };
                     let adjoint = Bsdf::new(&material, &point, s.direction, other).unwrap().evaluate(fixed).unwrap();
                     assert!(close(e.value.r, adjoint.value.r, 1e-3), "{what}: {:?} vs {:?}", e.value, adjoint.value);
+                    // What VCM's weights need: the same pdfs in both transport modes and on
+                    // every evaluation (deterministic), whatever the walk's estimate.
+                    // (The other mode's value is the walk of the swapped pair, possibly zero.)
+                    if let Some(same) = Bsdf::new(&material, &point, fixed, other).unwrap().evaluate(s.direction) {
+                        assert_eq!(same.pdf, e.pdf, "{what}: pdfs depend on the mode");
+                    }
+                    assert_eq!(bsdf.evaluate(s.direction), Some(e), "{what}: not deterministic");
                     pairs += 1;
                 }
             }
