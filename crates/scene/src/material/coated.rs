@@ -43,8 +43,10 @@
 //! The value is computed for `(wo, wi) = (fixed, generated)` in radiance mode and
 //! `(generated, fixed)` in importance mode, so the adjoint relation holds exactly. The walk's
 //! estimate is reciprocal in expectation only. Russian roulette uses a closed-form albedo (the
-//! smooth, non-scattering formulas) that does not depend on the random walk. In spectral mode
-//! the value is computed in RGB and upsampled like a conductor's.
+//! smooth, non-scattering formulas) that does not depend on the random walk, taken at normal
+//! incidence for every direction: the continuation probability enters the MIS pdfs in both
+//! directions and must be a function of the vertex alone. In spectral mode the value is
+//! computed in RGB and upsampled like a conductor's.
 
 use math::{INV_PI, Vec3};
 use spectrum::Rgb;
@@ -237,6 +239,28 @@ impl Coated {
             + w.cosine * b.z * INV_PI;
         sum / w.total()
     }
+
+    /// The closed-form directional albedo per channel for the fixed direction `w` (the smooth,
+    /// non-scattering formulas; a rough estimate otherwise), at most 1.
+    fn directional_albedo(&self, w: Vec3) -> Rgb {
+        let (fresnel, refracted, tr) = self.crossing(w.z);
+        let scatter = self.layers.albedo * ((1.0 - fresnel) * (1.0 - tr * tr));
+        let eta = self.layers.top.eta;
+        let below = match self.layers.base {
+            Base::Diffuse(rho) => {
+                let r = self.moments.internal_reflectance;
+                let bounces = self.layers.max_depth.div_ceil(2) as i32;
+                let t = self.moments.mean_transmittance * tr * (1.0 - fresnel) / (eta * eta);
+                rho.map(|p| p * t * geometric_series(p * r, bounces))
+            }
+            Base::Conductor { .. } if self.all_specular() => return (self.delta_weight(w) + scatter).min(Rgb::WHITE),
+            Base::Conductor { eta, k, .. } => {
+                let a = fresnel_conductor_rgb(refracted, eta, k) * (tr * tr);
+                a.map(|a| a * (1.0 - fresnel).powi(2) / (1.0 - fresnel * a))
+            }
+        };
+        (Rgb::splat(fresnel) + below + scatter).min(Rgb::WHITE)
+    }
 }
 
 /// `Σ_{k<n} x^k`.
@@ -266,24 +290,12 @@ impl LeafModel for Coated {
         self.albedo(Vec3::Z).luminance()
     }
 
-    fn albedo(&self, w: Vec3) -> Rgb {
-        let (fresnel, refracted, tr) = self.crossing(w.z);
-        let scatter = self.layers.albedo * ((1.0 - fresnel) * (1.0 - tr * tr));
-        let eta = self.layers.top.eta;
-        let below = match self.layers.base {
-            Base::Diffuse(rho) => {
-                let r = self.moments.internal_reflectance;
-                let bounces = self.layers.max_depth.div_ceil(2) as i32;
-                let t = self.moments.mean_transmittance * tr * (1.0 - fresnel) / (eta * eta);
-                rho.map(|p| p * t * geometric_series(p * r, bounces))
-            }
-            Base::Conductor { .. } if self.all_specular() => return (self.delta_weight(w) + scatter).min(Rgb::WHITE),
-            Base::Conductor { eta, k, .. } => {
-                let a = fresnel_conductor_rgb(refracted, eta, k) * (tr * tr);
-                a.map(|a| a * (1.0 - fresnel).powi(2) / (1.0 - fresnel * a))
-            }
-        };
-        (Rgb::splat(fresnel) + below + scatter).min(Rgb::WHITE)
+    /// The closed-form albedo at normal incidence, for every fixed direction: Russian
+    /// roulette's continuation probability enters the MIS pdfs in both directions, and the
+    /// engine takes it at the fixed direction for both, so it must not depend on the direction
+    /// (`crates/render/tests/coated_mis.rs` checks the weights against the oracle).
+    fn albedo(&self, _: Vec3) -> Rgb {
+        self.directional_albedo(Vec3::Z)
     }
 
     fn evaluate(

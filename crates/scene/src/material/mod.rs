@@ -49,7 +49,9 @@
 //! `diffuse`, `diffuse_transmission`, `conductor`, `rough_conductor`, `dielectric`,
 //! `thin_dielectric`, `rough_dielectric`, `plastic`, `rough_plastic` (these two share
 //! `coating`; the rough one's tables are in `rough_coating`), `principled` and
-//! `principled_thin` (sharing `disney`; the clearcoat lobe in `clearcoat`), and
+//! `principled_thin` (sharing `disney`; the clearcoat lobe in `clearcoat`), pbrt-v4's coated
+//! materials in `coated` (parameters in `coated_parameters`, pbrt's random walk in
+//! `layered_walk` over the pieces in `layered_interfaces`), and
 //! SmallVCM's `reference` material, which keeps its own BSDF. Shared helpers have their own
 //! files: `fresnel`, `lobe` (sample/evaluation records), `shading` (shading point,
 //! transport mode, side tests, shading frame), GGX and Beckmann in [`crate::microfacet`].
