@@ -1065,3 +1065,12 @@ fn coated_materials_reject_bad_parameters_with_positions() {
     );
     assert!(e.contains("scene.pbrt:4:") && e.contains("only constant textures"), "{e}");
 }
+
+#[test]
+fn the_coated_spheres_scene_loads() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/coated-spheres.pbrt");
+    let d = io::load_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let coated = d.materials.iter().filter(|m| matches!(front_material(m), Material::Coated(_))).count();
+    assert_eq!(coated, 5, "{:?}", d.materials);
+    assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+}
