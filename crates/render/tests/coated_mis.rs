@@ -8,6 +8,9 @@
 //! are random-walk estimates). `mis_oracle.rs` tests the same algebra on the reference
 //! material with every kind of light; this file keeps to area lights.
 
+// Loops run over vertex numbers x_i of the path notation, which index several arrays.
+#![allow(clippy::needless_range_loop)]
+
 use math::{PI, Rng, Vec3};
 use render::vcm::mis::{self, ConnectionPdfs, MisConstants, NeePdfs, SubPathMis};
 use scene::material::{CoatedBase, CoatedParameters, CoatingInterface, CoatingLayer, ConductorIor};
@@ -97,9 +100,7 @@ impl TestPath {
         normal.push(facing_normal(-direction, rng));
         material.push(0);
         specular.push(false);
-        for v in [&mut material] {
-            v.reverse();
-        }
+        material.reverse();
         x.reverse();
         normal.reverse();
         specular.reverse();
