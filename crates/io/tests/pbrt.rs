@@ -513,8 +513,8 @@ fn dielectrics_mix_and_unsupported_materials() {
         }
         other => panic!("{other:?}"),
     }
-    let e = load_err("coated", &format!("{HEADER}Material \"coateddiffuse\"\n"));
-    assert_eq!(e.rsplit_once("scene.pbrt:").unwrap().1, "3:1: material \"coateddiffuse\" is not supported");
+    let e = load_err("hair", &format!("{HEADER}Material \"hair\"\n"));
+    assert_eq!(e.rsplit_once("scene.pbrt:").unwrap().1, "3:1: material \"hair\" is not supported");
     let e = load_err("interface", &format!("{HEADER}Material \"interface\"\n"));
     assert!(e.contains("scene.pbrt:3:1:") && e.contains("interface"), "{e}");
     let e = load_err("unknown_material", &format!("{HEADER}\nMaterial \"velvet\"\n"));
@@ -991,4 +991,113 @@ fn truncated_files_error_with_a_position_and_never_panic() {
     }
     // Cutting inside an attribute block (most of the file) leaves it unclosed.
     assert!(errors > ok, "{errors} errors, {ok} loads");
+}
+
+// ----- coated materials --------------------------------------------------------------------
+
+/// The coated parameters of a loaded material (pbrt's coated materials are two-sided).
+fn coated_parameters(m: &Material) -> &scene::material::CoatedParameters {
+    match front_material(m) {
+        Material::Coated(p) => p,
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn coated_materials_take_pbrts_parameters_and_defaults() {
+    use scene::material::{CoatedBase, ConductorIor};
+    let text = format!(
+        "{HEADER}Material \"coateddiffuse\"\n{TRIANGLE}\
+         Material \"coateddiffuse\" \"rgb reflectance\" [0.2 0.4 0.6] \"float roughness\" 0.04 \
+         \"float vroughness\" 0.09 \"float eta\" 1.3 \"float thickness\" 0.2 \"rgb albedo\" [0.5 0.5 0.5] \
+         \"float g\" 0.3 \"integer maxdepth\" 7 \"integer nsamples\" 2\n{TRIANGLE}\
+         Material \"coatedconductor\"\n{TRIANGLE}\
+         Material \"coatedconductor\" \"float interface.roughness\" 0.01 \"float conductor.uroughness\" 0.25 \
+         \"spectrum conductor.eta\" \"metal-Au-eta\" \"spectrum conductor.k\" \"metal-Au-k\" \
+         \"float interface.eta\" 1.7 \"bool remaproughness\" false\n{TRIANGLE}\
+         Material \"coatedconductor\" \"rgb reflectance\" [0.9 0.5 0.1]\n{TRIANGLE}"
+    );
+    let d = load_ok("coated", &text);
+    let m = |i: usize| d.materials[d.shapes[i].material as usize].clone();
+    // Defaults: η 1.5, smooth, thickness 0.01, no scattering, maxdepth 10, one sample.
+    let defaults = m(0);
+    let p = coated_parameters(&defaults);
+    assert_eq!((p.interface().eta, p.interface().alpha_u, p.interface().alpha_v), (1.5, 0.0, 0.0));
+    assert_eq!((p.layer().thickness, p.layer().g, p.layer().max_depth, p.layer().samples), (0.01, 0.0, 10, 1));
+    assert_eq!(constant(&p.layer().albedo), Rgb::BLACK);
+    let CoatedBase::Diffuse { reflectance } = p.base() else { panic!("{:?}", p.base()) };
+    assert_eq!(constant(reflectance), Rgb::splat(0.5));
+    // Given values; α = √roughness, vroughness overrides roughness.
+    let given = m(1);
+    let p = coated_parameters(&given);
+    assert!((p.interface().alpha_u - 0.2).abs() < 1e-6 && (p.interface().alpha_v - 0.3).abs() < 1e-6);
+    assert_eq!((p.interface().eta, p.layer().thickness, p.layer().g), (1.3, 0.2, 0.3));
+    assert_eq!((p.layer().max_depth, p.layer().samples), (7, 2));
+    assert_eq!(constant(&p.layer().albedo), Rgb::splat(0.5));
+    let CoatedBase::Diffuse { reflectance } = p.base() else { panic!() };
+    assert_eq!(constant(reflectance), Rgb::new(0.2, 0.4, 0.6));
+    // The conductor: copper by default, smooth.
+    let copper = m(2);
+    let p = coated_parameters(&copper);
+    let cu =
+        (io::pbrt::color::named_metal("metal-Cu-eta").unwrap(), io::pbrt::color::named_metal("metal-Cu-k").unwrap());
+    assert_eq!(
+        p.base(),
+        &CoatedBase::Conductor { ior: ConductorIor::Complex { eta: cu.0, k: cu.1 }, alpha_u: 0.0, alpha_v: 0.0 }
+    );
+    // Named spectra, prefixed roughness without remapping.
+    let gold = m(3);
+    let p = coated_parameters(&gold);
+    assert_eq!((p.interface().eta, p.interface().alpha_u), (1.7, 0.01));
+    let CoatedBase::Conductor { ior: ConductorIor::Complex { eta, .. }, alpha_u, alpha_v } = p.base() else { panic!() };
+    assert_eq!((*alpha_u, *alpha_v), (0.25, 0.0));
+    assert_eq!(*eta, io::pbrt::color::named_metal("metal-Au-eta").unwrap());
+    // Reflectance instead of η and k.
+    let reflectance = m(4);
+    let CoatedBase::Conductor { ior: ConductorIor::Reflectance(r), .. } = coated_parameters(&reflectance).base() else {
+        panic!()
+    };
+    assert_eq!(constant(r), Rgb::new(0.9, 0.5, 0.1));
+    assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+}
+
+#[test]
+fn coated_materials_reject_bad_parameters_with_positions() {
+    let cases = [
+        ("\"rgb reflectance\" [1.5 0 0]", "outside [0, 1]"),
+        ("\"float eta\" -1", "must be positive"),
+        ("\"float thickness\" -0.1", "thickness"),
+        ("\"float g\" 1", "g = 1"),
+        ("\"integer maxdepth\" 0", "maxdepth = 0"),
+        ("\"integer nsamples\" -2", "nsamples = -2"),
+        ("\"float roughness\" -0.5", "roughness must be"),
+        ("\"rgb albedo\" [0.5 2 0.5]", "outside [0, 1]"),
+        ("\"string eta\" \"x\"", "eta needs one float"),
+    ];
+    for (k, (params, expected)) in cases.into_iter().enumerate() {
+        let e = load_err(&format!("coated_bad_{k}"), &format!("{HEADER}Material \"coateddiffuse\" {params}\n"));
+        assert!(e.contains("scene.pbrt:3:") && e.contains(expected), "{params}: {e}");
+    }
+    let e = load_err(
+        "coated_both",
+        &format!("{HEADER}Material \"coatedconductor\" \"rgb reflectance\" [0.5 0.5 0.5] \"float conductor.k\" 2\n"),
+    );
+    assert!(e.contains("scene.pbrt:3:") && e.contains("exclude each other"), "{e}");
+    let e = load_err(
+        "coated_texture",
+        &format!(
+            "{HEADER}Texture \"t\" \"float\" \"checkerboard\"\n\
+             Material \"coatedconductor\" \"texture interface.roughness\" \"t\"\n"
+        ),
+    );
+    assert!(e.contains("scene.pbrt:4:") && e.contains("only constant textures"), "{e}");
+}
+
+#[test]
+fn the_coated_spheres_scene_loads() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/coated-spheres.pbrt");
+    let d = io::load_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let coated = d.materials.iter().filter(|m| matches!(front_material(m), Material::Coated(_))).count();
+    assert_eq!(coated, 5, "{:?}", d.materials);
+    assert!(d.warnings.is_empty(), "{:?}", d.warnings);
 }

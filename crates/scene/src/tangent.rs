@@ -85,6 +85,7 @@ impl Material {
             Material::NormalMap { nested, .. } | Material::BumpMap { nested, .. } => nested.is_anisotropic(),
             Material::Principled(p) => varies(&p.anisotropic),
             Material::PrincipledThin(p) => varies(&p.anisotropic),
+            Material::Coated(p) => p.is_anisotropic(),
             _ => false,
         }
     }

@@ -46,11 +46,12 @@
 //!   file that names them. `Import` is treated as `Include`. Gzip-compressed scene and PLY
 //!   files (`.pbrt.gz`, `.ply.gz`; recognised by their content) are decompressed.
 //! - **Unsupported** features are errors naming them (object instancing, media, textures other
-//!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `coateddiffuse` and other layered
-//!   materials, …);
+//!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `hair`, `measured`,
+//!   `subsurface`, …); the layered `coateddiffuse` and `coatedconductor` are in `coated.rs`;
 //!   unsupported optional parameters are warnings in [`SceneDescription::warnings`].
 
 mod alpha;
+mod coated;
 pub mod color;
 pub mod envmap;
 mod instancing;
@@ -1164,7 +1165,8 @@ impl Builder {
                 Material::Blend { weight, first: lookup(&names[0])?, second: lookup(&names[1])? }
             }
             "interface" => return Err(err(file, d.pos, "material \"interface\" (media boundaries) is not supported")),
-            other @ ("coateddiffuse" | "coatedconductor" | "hair" | "measured" | "subsurface") => {
+            "coateddiffuse" | "coatedconductor" => self.coated_material(d, ty)?,
+            other @ ("hair" | "measured" | "subsurface") => {
                 return Err(err(file, d.pos, format!("material \"{other}\" is not supported")));
             }
             other => return Err(err(file, d.pos, format!("unknown material type \"{other}\""))),

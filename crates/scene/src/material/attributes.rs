@@ -31,6 +31,7 @@ impl Material {
             }
             Material::Principled(p) => p.textures().into_iter().for_each(f),
             Material::PrincipledThin(p) => p.textures().into_iter().for_each(f),
+            Material::Coated(p) => p.textures().into_iter().for_each(f),
             Material::Blend { weight, first, second } => {
                 f(weight);
                 first.for_each_bsdf_texture(f);

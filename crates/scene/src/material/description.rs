@@ -6,6 +6,7 @@ use spectrum::fluorescence::Fluorescence;
 use spectrum::ior::Ior;
 
 use super::MAX_COMPONENTS;
+use super::coated_parameters::CoatedParameters;
 use super::principled::PrincipledParameters;
 use super::principled_thin::PrincipledThinParameters;
 use super::reference::ReferenceMaterial;
@@ -138,6 +139,9 @@ pub enum Material {
     Principled(Box<PrincipledParameters>),
     /// Mitsuba 3's `principledthin` (the thin-surface Disney BSDF), the same from both sides.
     PrincipledThin(Box<PrincipledThinParameters>),
+    /// pbrt-v4's `coateddiffuse` and `coatedconductor`: a dielectric interface over a
+    /// scattering medium over a diffuse or conductor base, one-sided (see `material/coated.rs`).
+    Coated(Box<CoatedParameters>),
     /// Linear blend `(1 − weight)·first + weight·second`.
     Blend {
         /// Blend weight in [0, 1] (the first channel of the texture is used).

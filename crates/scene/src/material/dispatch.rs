@@ -8,6 +8,7 @@
 use math::Vec3;
 use spectrum::Rgb;
 
+use super::coated::Coated;
 use super::conductor::Conductor;
 use super::description::Material;
 use super::dielectric::Dielectric;
@@ -88,6 +89,7 @@ pub(super) enum Model {
     RoughPlastic(RoughPlastic),
     Principled(Principled),
     PrincipledThin(PrincipledThin),
+    Coated(Coated),
 }
 
 /// `each_model!(model, m => expression)`: evaluates the expression with `m` bound to the
@@ -106,6 +108,7 @@ macro_rules! each_model {
             Model::RoughPlastic($m) => $e,
             Model::Principled($m) => $e,
             Model::PrincipledThin($m) => $e,
+            Model::Coated($m) => $e,
         }
     };
 }
@@ -206,6 +209,7 @@ impl Model {
             )),
             Material::Principled(p) => Model::Principled(Principled::new(p, uv)),
             Material::PrincipledThin(p) => Model::PrincipledThin(PrincipledThin::new(p, uv)),
+            Material::Coated(p) => Model::Coated(Coated::new(p, uv)),
         };
         Some(model)
     }

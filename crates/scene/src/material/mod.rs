@@ -49,7 +49,9 @@
 //! `diffuse`, `diffuse_transmission`, `conductor`, `rough_conductor`, `dielectric`,
 //! `thin_dielectric`, `rough_dielectric`, `plastic`, `rough_plastic` (these two share
 //! `coating`; the rough one's tables are in `rough_coating`), `principled` and
-//! `principled_thin` (sharing `disney`; the clearcoat lobe in `clearcoat`), and
+//! `principled_thin` (sharing `disney`; the clearcoat lobe in `clearcoat`), pbrt-v4's coated
+//! materials in `coated` (parameters in `coated_parameters`, pbrt's random walk in
+//! `layered_walk` over the pieces in `layered_interfaces`), and
 //! SmallVCM's `reference` material, which keeps its own BSDF. Shared helpers have their own
 //! files: `fresnel`, `lobe` (sample/evaluation records), `shading` (shading point,
 //! transport mode, side tests, shading frame), GGX and Beckmann in [`crate::microfacet`].
@@ -72,6 +74,8 @@ mod attributes;
 mod bsdf;
 mod bump_map;
 mod clearcoat;
+mod coated;
+mod coated_parameters;
 mod coating;
 mod conductor;
 mod description;
@@ -81,6 +85,8 @@ mod diffuse_transmission;
 mod disney;
 mod dispatch;
 mod fresnel;
+mod layered_interfaces;
+mod layered_walk;
 mod lobe;
 mod mixture;
 mod normal_map;
@@ -99,6 +105,7 @@ mod thin_dielectric;
 
 pub use bsdf::Bsdf;
 pub use bump_map::luminance_gradient;
+pub use coated_parameters::{CoatedBase, CoatedParameters, CoatingInterface, CoatingLayer, ConductorIor};
 pub use description::Material;
 pub use fresnel::fresnel_dielectric;
 pub use perturb::SurfaceTangents;
