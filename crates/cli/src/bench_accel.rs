@@ -4,13 +4,19 @@
 //! Rays start at points on the scene's surfaces (found by casting rays from the camera through
 //! random raster positions) and go in uniformly random directions; shadow rays go from one such
 //! point towards another. The rays are generated before timing starts.
+//!
+//! Below each row: the work per ray (wide nodes visited, ray–box tests, primitive tests), counted
+//! on a tree over the scene's world primitives (instances are not entered). Built with the
+//! `binary-bvh` feature (`cargo build --release --features binary-bvh`), the same counts for the
+//! previous binary tree and an interleaved A/B timing of both trees on the same rays in this
+//! process, one thread (a rough indication on a loaded machine; the counts are exact).
 
 use std::time::{Duration, Instant};
 
-use math::{Aabb, Ray, Rng, Vec2, Vec3, warp};
+use math::{Aabb, RAY_EPSILON, Ray, Rng, Vec2, Vec3, warp};
 use rayon::prelude::*;
 use scene::Scene;
-use scene::accel::Bvh;
+use scene::accel::{Bvh, TraversalCounts};
 
 /// Rays per measurement.
 const RAYS: usize = 1 << 20;
@@ -21,7 +27,6 @@ pub fn run(scene: &Scene, threads: usize) {
     let start = Instant::now();
     let bvh = Bvh::build(&bounds);
     let build = start.elapsed();
-    drop(bvh);
     let points = surface_points(scene, RAYS);
     if points.len() < 2 {
         println!("{:<28} {:>10} primitives: the camera sees no surface; no rays to time", scene.name, bounds.len());
@@ -65,6 +70,128 @@ pub fn run(scene: &Scene, threads: usize) {
         mrays(shadow.len(), sn),
         100.0 * hits as f64 / closest.len() as f64,
         100.0 * blocked as f64 / shadow.len().max(1) as f64,
+    );
+    let rays = Rays { closest: &closest, shadow: &shadow };
+    let wide = rays.counts(
+        |r, c| bvh.closest_hit_counted(r, f32::INFINITY, |i, r, t| intersect(scene, i, r, t), c).is_some(),
+        |r, t, c| bvh.any_hit_counted(r, t, |i, r, t| intersect(scene, i, r, t).is_some(), c),
+    );
+    println!("  4-wide BVH, per ray: {wide}");
+    #[cfg(feature = "binary-bvh")]
+    binary_comparison(scene, &bounds, &bvh, &rays);
+}
+
+/// Nearest hit on world primitive `i` (what the scene's query does without alpha masks).
+#[inline(always)]
+fn intersect(scene: &Scene, i: u32, ray: &Ray, t_max: f32) -> Option<f32> {
+    scene.primitives[i as usize].shape.intersect(ray, t_max)
+}
+
+/// The rays of one scene: closest-hit rays, and shadow rays as (origin, unit direction, length).
+struct Rays<'a> {
+    closest: &'a [Ray],
+    shadow: &'a [(Vec3, Vec3, f32)],
+}
+
+impl Rays<'_> {
+    /// The shadow ray and its `t_max` as [`Scene::occluded`] forms them.
+    fn shadow_ray(&self, i: usize) -> (Ray, f32) {
+        let (o, d, l) = self.shadow[i];
+        (Ray::new(o + RAY_EPSILON * d, d), l - 2.0 * RAY_EPSILON)
+    }
+
+    /// Work per ray of `closest` over the closest-hit rays and of `any` over the shadow rays.
+    fn counts(
+        &self,
+        closest: impl Fn(&Ray, &mut TraversalCounts) -> bool,
+        any: impl Fn(&Ray, f32, &mut TraversalCounts) -> bool,
+    ) -> String {
+        let (mut c, mut s) = (TraversalCounts::default(), TraversalCounts::default());
+        let hits = self.closest.iter().filter(|r| closest(r, &mut c)).count();
+        let blocked = (0..self.shadow.len())
+            .filter(|&i| {
+                let (ray, t_max) = self.shadow_ray(i);
+                t_max > 0.0 && any(&ray, t_max, &mut s)
+            })
+            .count();
+        let per = |x: u64, n: usize| x as f64 / n.max(1) as f64;
+        let (nc, ns) = (self.closest.len(), self.shadow.len());
+        format!(
+            "closest {:.2} nodes, {:.2} box tests, {:.2} primitive tests ({hits} hits); \
+             shadow {:.2} nodes, {:.2} box tests, {:.2} primitive tests ({blocked} blocked)",
+            per(c.nodes, nc),
+            per(c.box_tests, nc),
+            per(c.primitives, nc),
+            per(s.nodes, ns),
+            per(s.box_tests, ns),
+            per(s.primitives, ns)
+        )
+    }
+}
+
+/// On-CPU time of the calling thread (first field of `/proc/thread-self/schedstat`; zero where
+/// that file does not exist), so that time the thread waits for a core is not counted.
+#[cfg(feature = "binary-bvh")]
+fn thread_cpu_time() -> Duration {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").unwrap_or_default();
+    Duration::from_nanos(text.split_whitespace().next().and_then(|t| t.parse().ok()).unwrap_or(0))
+}
+
+/// Counts of the previous binary tree, and an interleaved A/B timing of both trees.
+#[cfg(feature = "binary-bvh")]
+fn binary_comparison(scene: &Scene, bounds: &[Aabb], bvh: &Bvh, rays: &Rays) {
+    use scene::accel::BinaryBvh;
+    let binary = BinaryBvh::build(bounds);
+    let counts = rays.counts(
+        |r, c| binary.closest_hit_counted(r, f32::INFINITY, |i, r, t| intersect(scene, i, r, t), c).is_some(),
+        |r, t, c| binary.any_hit_counted(r, t, |i, r, t| intersect(scene, i, r, t).is_some(), c),
+    );
+    println!("  binary BVH, per ray: {counts}");
+    // Alternating rounds over the same rays on this thread; the sums of each tree's rounds.
+    const ROUNDS: usize = 6;
+    let shadow: Vec<(Ray, f32)> = (0..rays.shadow.len()).map(|i| rays.shadow_ray(i)).filter(|r| r.1 > 0.0).collect();
+    let mut times = [[Duration::ZERO; 2]; 2];
+    let mut checks = [[0usize; 2]; 2];
+    for _ in 0..ROUNDS {
+        for (tree, (time, check)) in times.iter_mut().zip(checks.iter_mut()).enumerate() {
+            let start = thread_cpu_time();
+            check[0] = rays
+                .closest
+                .iter()
+                .filter(|r| {
+                    let hit = |i, r: &Ray, t| intersect(scene, i, r, t);
+                    match tree {
+                        0 => bvh.closest_hit(r, f32::INFINITY, hit).is_some(),
+                        _ => binary.closest_hit(r, f32::INFINITY, hit).is_some(),
+                    }
+                })
+                .count();
+            time[0] += thread_cpu_time() - start;
+            let start = thread_cpu_time();
+            check[1] = shadow
+                .iter()
+                .filter(|(r, t_max)| {
+                    let hit = |i, r: &Ray, t| intersect(scene, i, r, t).is_some();
+                    match tree {
+                        0 => bvh.any_hit(r, *t_max, hit),
+                        _ => binary.any_hit(r, *t_max, hit),
+                    }
+                })
+                .count();
+            time[1] += thread_cpu_time() - start;
+        }
+    }
+    assert_eq!(checks[0], checks[1], "the two trees disagree on the number of hits");
+    let rate = |n: usize, t: Duration| (n * ROUNDS) as f64 / t.as_secs_f64() / 1e6;
+    println!(
+        "  A/B, 1 thread (its CPU time), {ROUNDS} interleaved rounds: closest {:.2} (4-wide) vs {:.2} (binary) Mrays/s = {:.2}x; \
+         shadow {:.2} vs {:.2} Mrays/s = {:.2}x",
+        rate(rays.closest.len(), times[0][0]),
+        rate(rays.closest.len(), times[1][0]),
+        times[1][0].as_secs_f64() / times[0][0].as_secs_f64(),
+        rate(shadow.len(), times[0][1]),
+        rate(shadow.len(), times[1][1]),
+        times[1][1].as_secs_f64() / times[0][1].as_secs_f64(),
     );
 }
 

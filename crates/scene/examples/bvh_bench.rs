@@ -1,16 +1,19 @@
 //! BVH benchmark: builds the tree over a ~1M-triangle noisy tessellated sphere and measures
 //! closest-hit and any-hit (shadow) throughput for incoherent random rays, on one thread and on
-//! all cores, for `scene::accel::Bvh` and, for comparison, the `obvhs` crate's CWBVH.
+//! all cores, for `scene::accel::Bvh` (4-wide) and, for comparison, the previous binary
+//! traversal (`scene::accel::BinaryBvh`) and the `obvhs` crate's CWBVH. Also counts the work per
+//! ray (nodes visited, box tests, primitive tests) and times the 4-wide and binary trees in
+//! interleaved rounds on the same rays.
 //!
-//! Run with `cargo run --release -p scene --example bvh_bench [-- STACKS]` (default 500 stacks,
-//! i.e. 4·500² = 1M triangles).
+//! Run with `cargo run --release -p scene --features binary-bvh --example bvh_bench [-- STACKS]`
+//! (default 500 stacks, i.e. 4·500² = 1M triangles).
 
 use math::{Aabb, Ray, Rng, Vec3, Vec3A, warp};
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::ray::RayHit;
 use rayon::prelude::*;
-use scene::accel::Bvh;
+use scene::accel::{BinaryBvh, Bvh, TraversalCounts};
 use std::time::{Duration, Instant};
 
 type Tri = [Vec3A; 3];
@@ -145,9 +148,10 @@ fn main() {
     let stats = bvh.stats();
     println!(
         "scene::accel::Bvh  build {build_all:.3} s ({threads} threads), {build_one:.3} s (1 thread); \
-         {} nodes, {} leaves, depth {}, SAH cost {:.1}",
-        stats.nodes, stats.leaves, stats.max_depth, stats.sah_cost
+         binary tree: {} nodes, {} leaves, depth {}, SAH cost {:.1}; 4-wide: {} nodes, depth {}",
+        stats.nodes, stats.leaves, stats.max_depth, stats.sah_cost, stats.wide_nodes, stats.wide_max_depth
     );
+    let binary = BinaryBvh::build(&bounds);
 
     let rays = closest_rays(2_000_000);
     let shadows = shadow_rays(2_000_000);
@@ -158,6 +162,14 @@ fn main() {
     let ours_any = |ray: &Ray, t_max: f32| {
         let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction));
         bvh.any_hit(ray, t_max, |p, _, t| intersect(&tris[p as usize], o, d, t).is_some()) as u32 as f64
+    };
+    let binary_closest = |ray: &Ray, t_max: f32| {
+        let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction));
+        binary.closest_hit(ray, t_max, |p, _, t| intersect(&tris[p as usize], o, d, t)).map_or(0.0, |h| h.1 as f64)
+    };
+    let binary_any = |ray: &Ray, t_max: f32| {
+        let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.direction));
+        binary.any_hit(ray, t_max, |p, _, t| intersect(&tris[p as usize], o, d, t).is_some()) as u32 as f64
     };
 
     // --- obvhs CWBVH (8-wide, compressed nodes), built from the same boxes.
@@ -197,19 +209,28 @@ fn main() {
     // Primitive tests per ray (a measure of tree quality independent of timing noise).
     let sample = 200_000;
     let count_tests = |name: &str, rays: &[(Ray, f32)], any: bool| {
-        let tests = std::cell::Cell::new(0u64);
-        let ours_test = |p: u32, r: &Ray, t: f32| {
-            tests.set(tests.get() + 1);
-            intersect(&tris[p as usize], Vec3A::from(r.origin), Vec3A::from(r.direction), t)
-        };
+        let test =
+            |p: u32, r: &Ray, t: f32| intersect(&tris[p as usize], Vec3A::from(r.origin), Vec3A::from(r.direction), t);
+        let (mut wide, mut bin) = (TraversalCounts::default(), TraversalCounts::default());
         for (r, t) in &rays[..sample] {
             if any {
-                bvh.any_hit(r, *t, |p, r, t| ours_test(p, r, t).is_some());
+                bvh.any_hit_counted(r, *t, |p, r, t| test(p, r, t).is_some(), &mut wide);
+                binary.any_hit_counted(r, *t, |p, r, t| test(p, r, t).is_some(), &mut bin);
             } else {
-                bvh.closest_hit(r, *t, ours_test);
+                bvh.closest_hit_counted(r, *t, test, &mut wide);
+                binary.closest_hit_counted(r, *t, test, &mut bin);
             }
         }
-        let ours = tests.replace(0);
+        let per = |x: u64| x as f64 / sample as f64;
+        println!(
+            "{name}: per ray, 4-wide: {:.2} nodes, {:.2} box tests; binary: {:.2} nodes, {:.2} box tests",
+            per(wide.nodes),
+            per(wide.box_tests),
+            per(bin.nodes),
+            per(bin.box_tests)
+        );
+        let ours = wide.primitives;
+        let tests = std::cell::Cell::new(0u64);
         let ob_test = |r: &obvhs::ray::Ray, slot: usize| {
             tests.set(tests.get() + 1);
             let tri = &tris[cwbvh.primitive_indices[slot] as usize];
@@ -225,8 +246,9 @@ fn main() {
         }
         let theirs = tests.get();
         println!(
-            "{name}: primitive tests per ray: scene::accel {:.1}, obvhs {:.1}",
+            "{name}: primitive tests per ray: scene::accel 4-wide {:.2}, binary {:.2}, obvhs {:.2}",
             ours as f64 / sample as f64,
+            bin.primitives as f64 / sample as f64,
             theirs as f64 / sample as f64
         );
     };
@@ -243,7 +265,39 @@ fn main() {
         println!("{name:<36} {one:>15.2} {one_cpu:>15.2} {all:>18.2}   {checksum:.6e}");
     };
     report("scene::accel::Bvh closest_hit", &rays, &ours_closest);
+    report("scene::accel::BinaryBvh closest_hit", &rays, &binary_closest);
     report("obvhs CwBvh ray_traverse", &rays, &ob_closest);
     report("scene::accel::Bvh any_hit (shadow)", &shadows, &ours_any);
+    report("scene::accel::BinaryBvh any_hit", &shadows, &binary_any);
     report("obvhs CwBvh ray_traverse_miss", &shadows, &ob_any);
+
+    // Interleaved A/B on one thread: rounds alternate between the trees on the same rays, so
+    // that load from other processes affects both alike.
+    let interleaved = |name: &str,
+                       rays: &[(Ray, f32)],
+                       a: &(dyn Fn(&Ray, f32) -> f64 + Sync),
+                       b: &(dyn Fn(&Ray, f32) -> f64 + Sync)| {
+        const ROUNDS: usize = 6;
+        let rays = &rays[..500_000];
+        let mut times = [Duration::ZERO; 2];
+        for _ in 0..ROUNDS {
+            for (time, query) in times.iter_mut().zip([a, b]) {
+                let start = thread_cpu_time();
+                let checksum: f64 = rays.iter().map(|(r, t)| query(r, *t)).sum();
+                std::hint::black_box(checksum);
+                *time += thread_cpu_time().zip(start).map_or(Duration::ZERO, |(b, a)| b.saturating_sub(a));
+            }
+        }
+        let rate = |t: Duration| (rays.len() * ROUNDS) as f64 / t.as_secs_f64() / 1e6;
+        println!(
+            "A/B {name}, 1 thread (cpu), {ROUNDS} interleaved rounds: 4-wide {:.2}, binary {:.2} Mrays/s = {:.2}x",
+            rate(times[0]),
+            rate(times[1]),
+            times[1].as_secs_f64() / times[0].as_secs_f64()
+        );
+    };
+    single_pool.install(|| {
+        interleaved("closest hit", &rays, &ours_closest, &binary_closest);
+        interleaved("any hit", &shadows, &ours_any, &binary_any);
+    });
 }

@@ -1,0 +1,198 @@
+//! Ray queries on the 4-wide tree: nearest hit (front to back, with pruning) and any hit (stops
+//! at the first blocker). Both are allocation-free: the traversal stack is a fixed-capacity
+//! array on the call stack.
+//!
+//! Tie rule of the nearest hit: of several primitives hit at exactly the same distance, the one
+//! with the smallest id wins, whatever the order in which the traversal meets them. A primitive
+//! with a smaller id than the current best is asked for hits up to and including the current
+//! distance (`t_max` one ulp above it), one with a larger id only for strictly nearer hits; so
+//! every hit the callback reports is taken, which callers rely on (see `Bvh::closest_hit`).
+
+use arrayvec::ArrayVec;
+use math::Ray;
+
+use super::ray_box::{ROBUST_EXIT, RayBox};
+use super::wide::{INTERIOR, WIDTH};
+use super::{Bvh, MAX_DEPTH, TraversalCounts};
+
+/// Capacity of the traversal stack. The wide tree is at most as deep as the binary one
+/// (< [`MAX_DEPTH`]), and each node on the current path leaves at most `WIDTH − 1` siblings on
+/// the stack, plus at most `WIDTH` pushed by the node being visited.
+const STACK_SIZE: usize = WIDTH * MAX_DEPTH;
+
+/// A child waiting on the stack: its reference (as in [`super::wide::WideNode`]) and the
+/// distance at which the ray enters its box.
+#[derive(Clone, Copy, Debug, Default)]
+struct Entry {
+    child: u32,
+    meta: u32,
+    t: f32,
+}
+
+/// What a query counts; `()` counts nothing and compiles to nothing.
+pub(super) trait Tally {
+    /// An interior node was visited and `boxes` ray–box tests made there.
+    fn node(&mut self, boxes: u64);
+    /// A ray–box test outside a node visit (the binary tree's root box).
+    #[cfg(any(test, feature = "binary-bvh"))]
+    fn root_box(&mut self);
+    /// A primitive was handed to the callback.
+    fn primitive(&mut self);
+}
+
+impl Tally for () {
+    #[inline(always)]
+    fn node(&mut self, _boxes: u64) {}
+    #[cfg(any(test, feature = "binary-bvh"))]
+    #[inline(always)]
+    fn root_box(&mut self) {}
+    #[inline(always)]
+    fn primitive(&mut self) {}
+}
+
+impl Tally for TraversalCounts {
+    #[inline(always)]
+    fn node(&mut self, boxes: u64) {
+        self.nodes += 1;
+        self.box_tests += boxes;
+    }
+    #[cfg(any(test, feature = "binary-bvh"))]
+    #[inline(always)]
+    fn root_box(&mut self) {
+        self.box_tests += 1;
+    }
+    #[inline(always)]
+    fn primitive(&mut self) {
+        self.primitives += 1;
+    }
+}
+
+/// The smallest `f32` above `x`, for `x > 0` finite (`+∞` stays `+∞`).
+#[inline(always)]
+fn next_up(x: f32) -> f32 {
+    if x.is_finite() { f32::from_bits(x.to_bits() + 1) } else { x }
+}
+
+impl Bvh {
+    /// The primitive ids of leaf `entry`. A single primitive's id is stored in the node itself,
+    /// which saves the load from the index array.
+    #[inline(always)]
+    fn leaf_prims<'a>(&'a self, entry: &'a Entry) -> &'a [u32] {
+        if entry.meta == 1 {
+            std::slice::from_ref(&entry.child)
+        } else {
+            let first = entry.child as usize;
+            &self.prims[first..first + entry.meta as usize]
+        }
+    }
+
+    /// [`Bvh::closest_hit`], counting into `tally`.
+    #[inline(always)]
+    pub(super) fn closest_hit_with<T: Tally>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
+        tally: &mut T,
+    ) -> Option<(u32, f32)> {
+        if self.nodes.is_empty() || t_max.is_nan() || t_max <= 0.0 {
+            return None;
+        }
+        let test = RayBox::new(ray);
+        let mut t_best = t_max;
+        let mut best: Option<u32> = None;
+        let mut stack: ArrayVec<Entry, STACK_SIZE> = ArrayVec::new();
+        let mut current = Entry { child: 0, meta: INTERIOR, t: 0.0 };
+        loop {
+            if current.meta == INTERIOR {
+                let node = &self.nodes[current.child as usize];
+                tally.node(WIDTH as u64);
+                let t = test.entries(node, t_best);
+                // The children the ray enters, farthest first (insertion sort by entry distance).
+                let mut hits = [Entry::default(); WIDTH];
+                let mut count = 0;
+                for (lane, &t_lane) in t.iter().enumerate() {
+                    if t_lane != f32::INFINITY {
+                        let entry = Entry { child: node.child[lane], meta: node.meta[lane], t: t_lane };
+                        let mut i = count;
+                        while i > 0 && hits[i - 1].t < entry.t {
+                            hits[i] = hits[i - 1];
+                            i -= 1;
+                        }
+                        hits[i] = entry;
+                        count += 1;
+                    }
+                }
+                if count > 0 {
+                    // Visit the nearest now, the others later (nearer ones popped first).
+                    for entry in &hits[..count - 1] {
+                        stack.push(*entry);
+                    }
+                    current = hits[count - 1];
+                    continue;
+                }
+            } else {
+                for &prim in self.leaf_prims(&current) {
+                    tally.primitive();
+                    // The tie rule (module doc): smaller ids may also hit at exactly `t_best`.
+                    let limit = if best.is_some_and(|b| prim < b) { next_up(t_best) } else { t_best };
+                    if let Some(t) = intersect(prim, ray, limit).filter(|&t| t < limit) {
+                        t_best = t;
+                        best = Some(prim);
+                    }
+                }
+            }
+            // Pop the next child that may still hold a nearer hit (or an equally near one).
+            loop {
+                let Some(entry) = stack.pop() else {
+                    return best.map(|prim| (prim, t_best));
+                };
+                if entry.t <= t_best * ROBUST_EXIT {
+                    current = entry;
+                    break;
+                }
+            }
+        }
+    }
+
+    /// [`Bvh::any_hit`], counting into `tally`.
+    #[inline(always)]
+    pub(super) fn any_hit_with<T: Tally>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut occluded: impl FnMut(u32, &Ray, f32) -> bool,
+        tally: &mut T,
+    ) -> bool {
+        if self.nodes.is_empty() || t_max.is_nan() || t_max <= 0.0 {
+            return false;
+        }
+        let test = RayBox::new(ray);
+        let mut stack: ArrayVec<u32, STACK_SIZE> = ArrayVec::new();
+        let mut node_index = 0u32;
+        loop {
+            let node = &self.nodes[node_index as usize];
+            tally.node(WIDTH as u64);
+            let t = test.entries(node, t_max);
+            for (lane, &t_lane) in t.iter().enumerate() {
+                if t_lane == f32::INFINITY {
+                    continue;
+                }
+                let entry = Entry { child: node.child[lane], meta: node.meta[lane], t: t_lane };
+                if entry.meta == INTERIOR {
+                    stack.push(entry.child);
+                    continue;
+                }
+                // Leaves are tested at once: any blocker ends the query.
+                for &prim in self.leaf_prims(&entry) {
+                    tally.primitive();
+                    if occluded(prim, ray, t_max) {
+                        return true;
+                    }
+                }
+            }
+            let Some(next) = stack.pop() else { return false };
+            node_index = next;
+        }
+    }
+}
