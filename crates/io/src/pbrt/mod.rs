@@ -45,7 +45,9 @@
 //! - **File names** (`Include`, `Import`, meshes, images) are relative to the directory of the
 //!   file that names them. `Import` is treated as `Include`. Gzip-compressed scene and PLY
 //!   files (`.pbrt.gz`, `.ply.gz`; recognised by their content) are decompressed.
-//! - **Unsupported** features are errors naming them (object instancing, media, textures other
+//! - **Media**: homogeneous media, `MediumInterface` and the `interface` material (see
+//!   `medium.rs`); grid media are errors.
+//! - **Unsupported** features are errors naming them (grid media, textures other
 //!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `coateddiffuse` and other layered
 //!   materials, …);
 //!   unsupported optional parameters are warnings in [`SceneDescription::warnings`].
