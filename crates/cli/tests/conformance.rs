@@ -1,7 +1,7 @@
 //! End-to-end test of `vcm conformance` on a tiny suite-like directory (tests/data/conformance):
 //! an analytic scene against its exact reference passes with pt and vcm, the same scene against a
 //! reference 2 % too bright fails, a scene that does not load is reported with its first error,
-//! a participating-media scene is listed, and the Markdown file carries the provenance.
+//! a scene without references is listed, and the Markdown file carries the provenance.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -80,7 +80,7 @@ fn runner_judges_a_tiny_suite() {
         let ratio: f64 = cell.split('×').nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
         assert!(cell.starts_with("FAIL") && (ratio - 1.0 / 1.02).abs() < 0.005, "{stdout}");
     }
-    assert_eq!(row(&stdout, "participating_media/test_fog")[1], "needs media", "{stdout}");
+    assert_eq!(row(&stdout, "participating_media/test_fog")[1], "no reference", "{stdout}");
     assert_eq!(row(&stdout, "unsupported/test_unknown_shape")[1], "no", "{stdout}");
     assert!(
         stdout.lines().any(|l| l.contains("unsupported/test_unknown_shape: unsupported/test_unknown_shape_path.xml:")

@@ -217,6 +217,7 @@ impl<'a> Renderer<'a> {
                  store only one of the two (the path tracer renders it)"
             ));
         }
+        check_media(scene, settings.algorithm)?;
         let integrator = match (settings.algorithm, settings.vcm_settings()) {
             (_, Some(vcm)) => Integrator::Vcm(Box::new(VcmEngine::new(scene, vcm))),
             (Algorithm::EyeLight, _) => Integrator::EyeLight,
@@ -280,6 +281,22 @@ impl<'a> Renderer<'a> {
             _ => None,
         }
     }
+}
+
+/// The error for a scene with participating media or index-matched boundaries that
+/// `algorithm` cannot render: only the path tracer renders them so far (issue #15), and not
+/// together with fluorescent materials.
+pub fn check_media(scene: &Scene, algorithm: Algorithm) -> Result<(), String> {
+    if !scene.media.is_active() {
+        return Ok(());
+    }
+    if algorithm != Algorithm::PathTracing {
+        return Err("media are rendered by pt only so far (issue #15)".to_string());
+    }
+    if scene.has_fluorescence() {
+        return Err("fluorescent materials in a scene with media are not supported yet (issue #15)".to_string());
+    }
+    Ok(())
 }
 
 /// How a progressive render can be continued, stopped and saved, beyond its settings.

@@ -2,6 +2,7 @@
 //!
 //! * [`path_tracer`]: the reference path tracer (BSDF sampling + next-event estimation,
 //!   combined by MIS), deliberately independent of the VCM engine.
+//! * [`volumetric`]: the path tracer's walk through participating media and null boundaries.
 //! * [`eye_light`]: a fast `|cos|` shading preview.
 //! * [`vcm`]: the VCM engine (light tracing, PPM, BPM, BPT, VCM).
 //! * [`fluorescent`]: wavelength shifts at fluorescent vertices, shared by all integrators.
@@ -19,6 +20,7 @@ pub mod path_tracer;
 pub mod progressive;
 pub mod splat_frame;
 pub mod vcm;
+pub mod volumetric;
 
 pub use driver::{Algorithm, RenderOutput, RenderSettings, render};
 

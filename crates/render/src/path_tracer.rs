@@ -12,6 +12,9 @@
 //! Path length counts segments including the camera segment: an emitter seen directly is a
 //! path of length 1, direct lighting of the first hit length 2.
 //!
+//! Scenes with participating media or index-matched boundaries take the volumetric walk of
+//! [`crate::volumetric`] instead (surface-only scenes never do, and render as before).
+//!
 //! An emitter that also reflects (a material with non-zero albedo) keeps scattering after its
 //! emission is collected; the reference scenes' emitters are black and end the path.
 
@@ -111,7 +114,7 @@ impl Heuristic {
 
     /// The weight of a sample of density `own` against a technique of density `other`.
     #[inline]
-    fn weight(self, own: f32, other: f32) -> f32 {
+    pub(crate) fn weight(self, own: f32, other: f32) -> f32 {
         match self {
             Heuristic::Balance => balance_heuristic(own, other),
             Heuristic::Power => power_heuristic(own, other),
@@ -134,10 +137,18 @@ impl PathTracer {
 
     /// Radiance arriving at the camera along `camera_ray`, as linear sRGB.
     pub fn radiance(&self, scene: &Scene, camera_ray: Ray, rng: &mut Rng) -> Rgb {
+        let volumetric = scene.media.is_active();
         if self.spectral {
             let (u, v) = (rng.uniform(), rng.uniform());
             let wavelengths = Hero4::sample_wavelengths(u, v, scene.has_fluorescence());
-            radiance::<Hero4>(self, scene, camera_ray, rng, &wavelengths).to_rgb(&wavelengths)
+            let value = if volumetric {
+                crate::volumetric::radiance::<Hero4>(self, scene, camera_ray, rng, &wavelengths)
+            } else {
+                radiance::<Hero4>(self, scene, camera_ray, rng, &wavelengths)
+            };
+            value.to_rgb(&wavelengths)
+        } else if volumetric {
+            crate::volumetric::radiance::<Rgb>(self, scene, camera_ray, rng, &())
         } else {
             radiance::<Rgb>(self, scene, camera_ray, rng, &())
         }

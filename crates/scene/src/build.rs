@@ -55,12 +55,16 @@ impl Scene {
         if let Some(&index) = spectra.lights.keys().find(|&&i| i as usize >= desc.lights.len()) {
             return Err(format!("an emission spectrum refers to light {index} of {}", desc.lights.len()));
         }
+        let mut shape_primitives = Vec::with_capacity(desc.shapes.len());
         for (shape_index, shape) in desc.shapes.iter().enumerate() {
             let index = shape_index as u32;
+            let first = parts.primitives.len();
             parts.add_shape(shape, spectra.shapes.get(&index), spectra.textures.get(&index), desc.materials.len())?;
+            shape_primitives.push(first..parts.primitives.len());
         }
         let primitives = std::mem::take(&mut parts.primitives);
         let (objects, instances) = build_instances(desc, &mut parts)?;
+        let media = crate::medium::build::media(&desc.media, &shape_primitives, primitives.len(), desc)?;
         let Parts { attributes, alpha_masks, mut lights, mut light_spectra, mut report, .. } = parts;
         let mut environments = 0;
         for (index, light) in desc.lights.iter().enumerate() {
@@ -100,6 +104,7 @@ impl Scene {
         )
         .with_attributes(attributes)
         .with_alpha_masks(alpha_masks)
+        .with_media(media)
         .with_light_spectra(if light_spectra.iter().any(Option::is_some) { light_spectra } else { Vec::new() });
         Ok((scene, report))
     }
@@ -430,6 +435,7 @@ mod tests {
             emission_spectra: Default::default(),
             objects: Vec::new(),
             instances: Vec::new(),
+            media: Default::default(),
         }
     }
 

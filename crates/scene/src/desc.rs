@@ -367,6 +367,8 @@ pub struct SceneDescription {
     /// Placements of [`SceneDescription::objects`] (Mitsuba `instance`, pbrt-v4
     /// `ObjectInstance`).
     pub instances: Vec<InstanceDesc>,
+    /// Participating media and index-matched boundaries (empty for surface-only scenes).
+    pub media: crate::medium::MediaDesc,
 }
 
 /// Shapes defined in their own (object) space, to be placed by instances. The shapes must not

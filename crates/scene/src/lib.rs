@@ -14,6 +14,7 @@ pub mod filter;
 pub mod instance;
 pub mod light;
 pub mod material;
+pub mod medium;
 pub mod microfacet;
 pub mod scene;
 pub mod shape;

@@ -15,6 +15,7 @@ use crate::desc::EmissionSpectrum;
 use crate::instance::{Instance, Object};
 use crate::light::{BoundingSphere, Light};
 use crate::material::{Material, ShadingPoint, SurfaceTangents};
+use crate::medium::Media;
 use crate::shape::Shape;
 use crate::tangent;
 use spectrum::{Rgb, SpectralMode};
@@ -130,6 +131,9 @@ pub struct Scene {
     pub instances: Vec<Instance>,
     /// Alpha masks referenced by [`Primitive::alpha`] (of world and object primitives alike).
     pub alpha_masks: Vec<AlphaMask>,
+    /// Participating media and index-matched boundaries ([`crate::medium`]); empty for
+    /// surface-only scenes.
+    pub media: Media,
     /// Emission spectra by light index (missing or `None`: the RGB value is upsampled).
     light_spectra: Vec<Option<LightSpectrum>>,
     /// Light selection ([`light_selection_weights`]).
@@ -192,6 +196,7 @@ impl Scene {
             objects,
             instances,
             alpha_masks: Vec::new(),
+            media: Media::default(),
             light_spectra: Vec::new(),
             light_selection,
             reads_mesh_attribute,
@@ -223,6 +228,12 @@ impl Scene {
     /// Sets the alpha masks that primitives refer to.
     pub fn with_alpha_masks(mut self, alpha_masks: Vec<AlphaMask>) -> Self {
         self.alpha_masks = alpha_masks;
+        self
+    }
+
+    /// Sets the participating media.
+    pub fn with_media(mut self, media: Media) -> Self {
+        self.media = media;
         self
     }
 

@@ -76,6 +76,7 @@ fn description(world: Vec<ShapeDesc>, objects: Vec<ShapeDesc>) -> SceneDescripti
             .map(|(i, s)| ObjectDesc { name: format!("object {i}"), shapes: vec![s] })
             .collect(),
         instances,
+        media: Default::default(),
     }
 }
 

@@ -69,6 +69,7 @@ fn description(materials: Vec<Material>, shapes: Vec<ShapeDesc>, lights: Vec<Lig
         emission_spectra: EmissionSpectra::default(),
         objects: Vec::new(),
         instances: Vec::new(),
+        media: Default::default(),
     }
 }
 

@@ -163,6 +163,7 @@ fn instanced_scene_matches_brute_force_over_the_flattened_geometry() {
         emission_spectra: Default::default(),
         objects,
         instances,
+        media: Default::default(),
     };
     let (scene, report) = Scene::from_description(&desc, None).unwrap();
     // The soup's 60 triangles are stored once, not once per instance.
@@ -236,6 +237,7 @@ fn instanced_emitters_are_refused() {
             }],
         }],
         instances: vec![InstanceDesc { name: "i".into(), object: 0, to_world: Affine3A::IDENTITY }],
+        media: Default::default(),
     };
     let error = Scene::from_description(&desc, None).err().unwrap();
     assert!(error.contains("bulb") && error.contains("lamps") && error.contains("emit"), "{error}");

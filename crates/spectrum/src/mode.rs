@@ -125,6 +125,16 @@ pub trait SpectralMode:
 
     /// True when no channel is NaN or infinite.
     fn is_finite(self) -> bool;
+
+    /// Number of channels (RGB: 3, [`Hero4`]: 4); participating media pick one to sample
+    /// distances with.
+    const CHANNELS: usize;
+
+    /// Channel `i` (< [`SpectralMode::CHANNELS`]).
+    fn channel(self, i: usize) -> f32;
+
+    /// `f` applied to every channel.
+    fn map(self, f: impl Fn(f32) -> f32) -> Self;
 }
 
 /// A per-channel slot map (identity by default).
@@ -143,6 +153,16 @@ impl SpectralMode for Rgb {
     const SHIFT_CHOICES: u32 = 3;
     const NAME: &'static str = "rgb";
     const DOUBLE_TERMINATION: f32 = 1.0;
+    const CHANNELS: usize = 3;
+
+    #[inline]
+    fn channel(self, i: usize) -> f32 {
+        self.to_array()[i]
+    }
+    #[inline]
+    fn map(self, f: impl Fn(f32) -> f32) -> Self {
+        Rgb::map(self, f)
+    }
 
     #[inline]
     fn splat(v: f32) -> Self {
@@ -296,6 +316,16 @@ impl SpectralMode for Hero4 {
     const SHIFT_CHOICES: u32 = 2;
     const NAME: &'static str = "spectral";
     const DOUBLE_TERMINATION: f32 = 1.0 / HERO_COUNT as f32;
+    const CHANNELS: usize = HERO_COUNT;
+
+    #[inline]
+    fn channel(self, i: usize) -> f32 {
+        self.0[i]
+    }
+    #[inline]
+    fn map(self, f: impl Fn(f32) -> f32) -> Self {
+        Hero4(self.0.map(f))
+    }
 
     #[inline]
     fn splat(v: f32) -> Self {

@@ -11,9 +11,6 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-/// Groups whose scenes need participating media, which the renderer does not have.
-pub const MEDIA_GROUPS: [&str; 1] = ["participating_media"];
-
 /// One test scene of the suite.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Case {
@@ -35,11 +32,6 @@ impl Case {
     /// `group/name`, as the table shows it.
     pub fn label(&self) -> String {
         format!("{}/{}", self.group, self.name)
-    }
-
-    /// Whether the scene needs participating media.
-    pub fn needs_media(&self) -> bool {
-        MEDIA_GROUPS.contains(&self.group.as_str())
     }
 
     /// Whether both reference files exist.
@@ -114,9 +106,9 @@ mod tests {
         let cases = discover(&dir).unwrap();
         assert_eq!(cases.len(), 2, "{cases:?}");
         assert_eq!((cases[0].label().as_str(), cases[0].integrator.as_str()), ("b_group/test_one", "path"));
-        assert!(!cases[0].needs_media() && !cases[0].has_references());
+        assert!(!cases[0].has_references());
         assert_eq!(cases[0].reference_variance, dir.join("b_group/refs/test_one_ref_rgb_var.exr"));
-        assert!(cases[1].needs_media());
+        assert_eq!(cases[1].label(), "participating_media/fog");
         assert!(discover(&dir.join("b_group/refs")).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }

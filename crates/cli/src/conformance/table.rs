@@ -8,8 +8,6 @@ use super::verdict::{Criteria, Verdict};
 /// What happened to one scene.
 #[derive(Clone, Debug)]
 pub enum SceneStatus {
-    /// The scene needs participating media; not rendered.
-    NeedsMedia,
     /// The scene loads but a reference file is missing; not rendered.
     NoReference,
     /// The scene did not load: the loader's first error, on one line.
@@ -61,7 +59,6 @@ impl Table {
             .map(|(label, status)| {
                 let mut row = vec![label.clone()];
                 match status {
-                    SceneStatus::NeedsMedia => row.push("needs media".into()),
                     SceneStatus::NoReference => row.push("no reference".into()),
                     SceneStatus::LoadError(_) => row.push("no".into()),
                     SceneStatus::Rendered(outcomes) => {
@@ -177,9 +174,9 @@ impl Table {
              git clone --depth 1 https://github.com/mitsuba-renderer/mitsuba-data\n\
              vcm conformance mitsuba-data/tests/scenes --markdown docs/conformance.md\n\
              ```\n\n\
-             (`mitsuba-data/tests/common` must sit beside `mitsuba-data/tests/scenes`.) The \
-             `participating_media` scenes need media, which the renderer does not have; they are \
-             listed, not rendered."
+             (`mitsuba-data/tests/common` must sit beside `mitsuba-data/tests/scenes`.) Scenes with \
+             participating media are rendered by `pt` only so far (issue #15); the other algorithms \
+             report that as an error."
         );
         md
     }
@@ -244,13 +241,13 @@ mod tests {
                     ]),
                 ),
                 ("g/b".into(), SceneStatus::LoadError("g/b_path.xml:3:5: unknown bsdf 'x'".into())),
-                ("participating_media/c".into(), SceneStatus::NeedsMedia),
+                ("participating_media/c".into(), SceneStatus::NoReference),
             ],
         };
         assert_eq!(table.counts(), (3, 1, vec![1, 0]));
         let text = table.plain();
         assert!(text.contains("PASS 99.90% ×1.0100 (64 spp)"), "{text}");
-        assert!(text.contains("error: render panicked") && text.contains("needs media"), "{text}");
+        assert!(text.contains("error: render panicked") && text.contains("no reference"), "{text}");
         assert!(text.contains("g/b: g/b_path.xml:3:5: unknown bsdf 'x'"), "{text}");
         assert!(text.contains("3 scenes, 1 load and render; passed: pt 1, vcm 0"), "{text}");
         let provenance = Provenance {

@@ -468,6 +468,7 @@ impl<'a> Loader<'a> {
                 opacity = Some(mask);
                 material
             }
+            "null" => return Err(p.error("a null bsdf is supported only as a shape's own bsdf")),
             other => return Err(p.error(format!("unsupported bsdf type '{other}'"))),
         };
         p.ignore(&["sample_visible"]);

@@ -36,6 +36,7 @@ mod bsdf;
 mod colour;
 mod emitter;
 mod mask;
+mod medium;
 mod principled;
 mod props;
 mod search;
@@ -153,6 +154,11 @@ pub(crate) struct Loader<'a> {
     pub(crate) settings: RenderSettings,
     /// Unsupported image-changing parameters are warnings instead of errors.
     permissive: bool,
+    /// Media, interfaces, the sensor's medium and `null` materials (see `medium.rs`).
+    media: scene::medium::MediaDesc,
+    medium_of_id: HashMap<String, u32>,
+    /// Inside a `shapegroup` (where media are not supported).
+    in_shapegroup: bool,
 }
 
 impl<'a> Loader<'a> {
@@ -180,6 +186,9 @@ impl<'a> Loader<'a> {
             integrator_seen: false,
             settings: RenderSettings::default(),
             permissive,
+            media: Default::default(),
+            medium_of_id: HashMap::new(),
+            in_shapegroup: false,
         }
     }
 
@@ -296,6 +305,7 @@ impl<'a> Loader<'a> {
                 }
                 Ok(())
             }
+            "bsdf" if node.attr("type") == Some("null") => Ok(()),
             "bsdf" | "texture" => {
                 match node.attr("id") {
                     Some(id) => {
@@ -328,9 +338,8 @@ impl<'a> Loader<'a> {
                 }
             }
             "ref" => Err(node.pos.error("<ref> is not allowed at the top level")),
-            "medium" | "phase" | "volume" => {
-                Err(node.pos.error(format!("<{}> (participating media) is not supported", node.tag)))
-            }
+            "medium" => self.medium_index(node).map(|_| ()),
+            "phase" | "volume" => Err(node.pos.error(format!("<{}> must be inside a <medium>", node.tag))),
             "sampler" => self.sampler(node),
             "film" if node.attr("type") == Some("ldrfilm") => Err(node.pos.error(xml::old_format("film 'ldrfilm'"))),
             "film" | "rfilter" => Err(node.pos.error(format!("<{}> must be inside a <sensor>", node.tag))),
@@ -373,6 +382,7 @@ impl<'a> Loader<'a> {
             emission_spectra: self.emission_spectra,
             objects: self.objects,
             instances: self.instances,
+            media: self.media,
         })
     }
 }

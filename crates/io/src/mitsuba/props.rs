@@ -16,8 +16,20 @@ use super::xml::{Node, Pos};
 use crate::scene_error::SceneError;
 
 /// Tags of nested plugin objects.
-pub(crate) const OBJECT_TAGS: [&str; 10] =
-    ["bsdf", "texture", "emitter", "shape", "sensor", "film", "rfilter", "sampler", "integrator", "medium"];
+pub(crate) const OBJECT_TAGS: [&str; 12] = [
+    "bsdf",
+    "texture",
+    "emitter",
+    "shape",
+    "sensor",
+    "film",
+    "rfilter",
+    "sampler",
+    "integrator",
+    "medium",
+    "phase",
+    "volume",
+];
 
 /// A parsed property value.
 #[derive(Clone, Debug)]

@@ -71,6 +71,11 @@ impl<'a> Loader<'a> {
         let p = Plugin::new(node)?;
         let mut film = None;
         for object in &p.objects {
+            if self.is_medium(object) {
+                object.take();
+                self.media.camera = Some(self.medium_index(object.node)?);
+                continue;
+            }
             match object.node.tag.as_str() {
                 "film" => {
                     object.take();

@@ -260,8 +260,31 @@ impl<'a> Loader<'a> {
 
         let mut material = None;
         let mut emission = None;
+        let mut interface = scene::medium::MediumInterface::default();
         for object in &p.objects {
             let child = object.node;
+            if self.is_medium(object) {
+                object.take();
+                let index = Some(self.medium_index(child)?);
+                match object.name.as_deref() {
+                    Some("interior") => interface.interior = index,
+                    Some("exterior") => interface.exterior = index,
+                    _ => {
+                        return Err(child
+                            .pos
+                            .error(format!("{what}: a medium must be named 'interior' or 'exterior'")));
+                    }
+                }
+                continue;
+            }
+            if matches!(child.tag.as_str(), "bsdf" | "ref") && self.is_null_bsdf(child) {
+                object.take();
+                if material.is_some() {
+                    return Err(child.pos.error(format!("{what}: more than one bsdf")));
+                }
+                material = Some(self.null_material());
+                continue;
+            }
             match child.tag.as_str() {
                 "bsdf" => {
                     object.take();
@@ -326,6 +349,12 @@ impl<'a> Loader<'a> {
             None => None,
         };
         let alpha = self.material_opacity.get(&material).cloned();
+        if interface != scene::medium::MediumInterface::default() {
+            if self.in_shapegroup {
+                return Err(p.error("media on shapes in a shapegroup are not supported (issue #15)"));
+            }
+            self.media.shapes.insert(self.shapes.len() as u32, interface);
+        }
         self.shapes.push(ShapeDesc { name, geometry, material, emission, alpha });
         Ok(())
     }
@@ -342,6 +371,7 @@ impl<'a> Loader<'a> {
         }
         let name = id.map(str::to_string).unwrap_or_else(|| format!("shapegroup#{}", self.objects.len()));
         let world_shapes = std::mem::take(&mut self.shapes);
+        self.in_shapegroup = true;
         let mut result = Ok(());
         for child in &node.children {
             result = match (child.tag.as_str(), child.attr("type")) {
@@ -367,6 +397,7 @@ impl<'a> Loader<'a> {
             }
         }
         let shapes = std::mem::replace(&mut self.shapes, world_shapes);
+        self.in_shapegroup = false;
         result?;
         if shapes.is_empty() {
             self.warnings.push(format!("{}: shapegroup '{name}' is empty", node.pos.location()));

@@ -45,7 +45,9 @@
 //! - **File names** (`Include`, `Import`, meshes, images) are relative to the directory of the
 //!   file that names them. `Import` is treated as `Include`. Gzip-compressed scene and PLY
 //!   files (`.pbrt.gz`, `.ply.gz`; recognised by their content) are decompressed.
-//! - **Unsupported** features are errors naming them (object instancing, media, textures other
+//! - **Media**: homogeneous media, `MediumInterface` and the `interface` material (see
+//!   `medium.rs`); grid media are errors.
+//! - **Unsupported** features are errors naming them (grid media, textures other
 //!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `hair`, `measured`,
 //!   `subsurface`, …); the layered `coateddiffuse` and `coatedconductor` are in `coated.rs`;
 //!   unsupported optional parameters are warnings in [`SceneDescription::warnings`].
@@ -55,6 +57,7 @@ mod coated;
 pub mod color;
 pub mod envmap;
 mod instancing;
+mod medium;
 mod parser;
 pub mod tokenizer;
 mod transform;
@@ -116,6 +119,8 @@ struct GraphicsState {
     area_light_spectrum: Option<EmissionSpectrum>,
     /// Its radiance image (`filename`, scale applied), for triangle meshes.
     area_light_texture: Option<Arc<Texture>>,
+    /// The current `MediumInterface` (see `medium.rs`).
+    medium_interface: scene::medium::MediumInterface,
 }
 
 /// What a `*Begin` pushed.
@@ -171,6 +176,9 @@ struct Builder {
     settings: RenderSettings,
     /// Unsupported image-changing parameters are warnings instead of errors.
     permissive: bool,
+    /// Named media, the current `MediumInterface`, interfaces and `interface` materials (see
+    /// `medium.rs`).
+    media: medium::PbrtMedia,
 }
 
 fn f32v(a: V3) -> Vec3 {
@@ -192,6 +200,7 @@ impl Builder {
                 area_light: None,
                 area_light_spectrum: None,
                 area_light_texture: None,
+                medium_interface: Default::default(),
             },
             stack: Vec::new(),
             named_coordinate_systems: HashMap::new(),
@@ -214,6 +223,7 @@ impl Builder {
             warnings: Vec::new(),
             settings: RenderSettings::default(),
             permissive,
+            media: medium::PbrtMedia::default(),
         }
     }
 
@@ -358,6 +368,7 @@ impl Builder {
             "Camera" => {
                 self.require_world(file, &d, false)?;
                 self.camera_directive(file, &d)?;
+                self.media.set_camera(self.state.medium_interface);
             }
             "Film" => {
                 self.require_world(file, &d, false)?;
@@ -422,20 +433,17 @@ impl Builder {
             "ObjectBegin" => self.object_begin(file, &d)?,
             "ObjectEnd" => self.object_end(file, &d)?,
             "ObjectInstance" => self.object_instance(file, &d)?,
-            "MakeNamedMedium" => {
-                return Err(err(file, d.pos, "MakeNamedMedium: participating media are not supported"));
-            }
-            "MediumInterface" => {
-                if d.args.iter().any(|a| !matches!(a, parser::Arg::Str(s) if s.is_empty())) {
-                    return Err(err(file, d.pos, "MediumInterface: participating media are not supported"));
-                }
-            }
+            "MakeNamedMedium" => self.make_named_medium(file, &d)?,
+            "MediumInterface" => self.state.medium_interface = self.medium_interface(file, &d)?,
             "Material" => {
                 self.require_world(file, &d, true)?;
                 let material = self.material(file, &d, d.str_arg(0))?;
                 self.warn_unused(&d.params);
                 self.materials.push(material);
                 self.state.material = Some(self.materials.len() as u32 - 1);
+                if d.str_arg(0) == "interface" {
+                    self.media.mark_interface(self.materials.len() as u32 - 1);
+                }
             }
             "MakeNamedMaterial" => {
                 self.require_world(file, &d, true)?;
@@ -448,6 +456,9 @@ impl Builder {
                 };
                 let material = self.material(file, &d, &ty)?;
                 self.warn_unused(&d.params);
+                if ty == "interface" {
+                    self.media.name_interface(&name);
+                }
                 self.named_materials.insert(name, (material, None));
             }
             "NamedMaterial" => {
@@ -466,6 +477,9 @@ impl Builder {
                     }
                 };
                 self.state.material = Some(index);
+                if self.media.is_interface_name(name) {
+                    self.media.mark_interface(index);
+                }
             }
             "Texture" => {
                 self.require_world(file, &d, true)?;
@@ -512,6 +526,7 @@ impl Builder {
             emission_spectra: self.emission_spectra,
             objects: self.objects,
             instances: self.instances,
+            media: self.media.finish(),
         })
     }
 
@@ -1164,7 +1179,8 @@ impl Builder {
                 };
                 Material::Blend { weight, first: lookup(&names[0])?, second: lookup(&names[1])? }
             }
-            "interface" => return Err(err(file, d.pos, "material \"interface\" (media boundaries) is not supported")),
+            // An index-matched boundary: a placeholder the scene marks as such (`medium.rs`).
+            "interface" => Material::Diffuse { reflectance: Texture::Constant(Rgb::BLACK) },
             "coateddiffuse" | "coatedconductor" => self.coated_material(d, ty)?,
             other @ ("hair" | "measured" | "subsurface") => {
                 return Err(err(file, d.pos, format!("material \"{other}\" is not supported")));
@@ -1381,6 +1397,11 @@ impl Builder {
             }
             self.emission_spectra.textures.insert(self.shapes.len() as u32, texture.clone());
         }
+        let interface = self.state.medium_interface;
+        if interface.interior != interface.exterior && self.defining.is_some() {
+            return Err(err(file, d.pos, "media on shapes in an object definition are not supported (issue #15)"));
+        }
+        self.media.shape(self.shapes.len() as u32, interface);
         self.shapes.push(ShapeDesc { name, geometry, material, emission: self.state.area_light, alpha });
         self.warn_unused(p);
         Ok(())
