@@ -59,7 +59,8 @@
 //!
 //! Normal and bump maps (`normal_map`, `bump_map`, dispatched in `perturb`) are not BSDFs but
 //! perturbations of the shading normal, which the scene applies when it builds a hit; their
-//! BSDF is the nested material's.
+//! BSDF is the nested material's, with Mitsuba's per-query adapter (`map_adapter`: the normal
+//! mirrored for a camera-side direction below it, and a shadowing factor on the light side).
 //!
 //! **Adding a model** is one new file (a struct implementing `dispatch::LeafModel`), one arm in
 //! `dispatch::Model` and in its `each_model!` macro, the `from_leaf` arm, the [`Material`]
@@ -82,6 +83,7 @@ mod disney;
 mod dispatch;
 mod fresnel;
 mod lobe;
+mod map_adapter;
 mod mixture;
 mod normal_map;
 mod perturb;
