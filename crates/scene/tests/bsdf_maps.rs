@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use math::{Frame, Rng, Vec2, Vec3};
 use scene::desc::{TextureImage, UvTransform};
-use scene::material::{SurfaceTangents, luminance_gradient};
+use scene::material::{MapOptions, SurfaceTangents, luminance_gradient};
 use scene::{Bsdf, FilterMode, Material, Sampling, ShadingPoint, Texture, TransportMode, WrapMode};
 use spectrum::Rgb;
 use testkit::{assert_chi2, chi2_sphere};
@@ -17,7 +17,7 @@ fn diffuse(rho: f32) -> Material {
 }
 
 fn normal_map(value: Rgb, nested: Material) -> Material {
-    Material::NormalMap { normals: Texture::Constant(value), nested: Box::new(nested) }
+    Material::NormalMap { normals: Texture::Constant(value), nested: Box::new(nested), options: MapOptions::MITSUBA }
 }
 
 /// The encoded tangent-space normal tilted by `a` radians from `n` towards `s`.
@@ -109,6 +109,7 @@ fn bump_map_of_a_ramp_tilts_a_plane_by_its_slope() {
         height: Texture::bitmap(ramp(16, slope), UvTransform::IDENTITY, clamp),
         scale,
         nested: Box::new(diffuse(0.5)),
+        options: MapOptions::MITSUBA,
     };
     // The plane z = 0 with p = (2u, 3v, 0).
     let t = SurfaceTangents {

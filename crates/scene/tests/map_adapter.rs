@@ -5,10 +5,11 @@
 //! and the sampler against its pdf when the normal is mirrored.
 
 use math::{Rng, Vec2, Vec3};
-use scene::material::SurfaceTangents;
+use scene::material::{MapOptions, SurfaceTangents};
 use scene::microfacet::Distribution;
 use scene::{Bsdf, Material, ShadingPoint, Texture, TransportMode};
 use spectrum::Rgb;
+use testkit::mitsuba_maps::tilted_diffuse_albedo;
 use testkit::{MeanVar, assert_chi2, chi2_sphere};
 
 fn diffuse(rho: f32) -> Material {
@@ -29,7 +30,7 @@ fn rough_conductor() -> Material {
 /// `nested` under a constant normal map that tilts the normal by `a` radians towards +x.
 fn tilted(a: f32, nested: Material) -> Material {
     let texel = Rgb::new(0.5 + 0.5 * a.sin(), 0.5, 0.5 + 0.5 * a.cos());
-    Material::NormalMap { normals: Texture::Constant(texel), nested: Box::new(nested) }
+    Material::NormalMap { normals: Texture::Constant(texel), nested: Box::new(nested), options: MapOptions::MITSUBA }
 }
 
 /// The shading point of a mapped material on the plane z = 0 with ∂p/∂u = +x, as the scene
@@ -49,33 +50,6 @@ fn point(material: &Material) -> ShadingPoint {
         tangent: Vec3::X,
         attribute: Rgb::BLACK,
     }
-}
-
-/// Mitsuba's shadowing factor for a perturbed normal at `a` radians and a light direction at
-/// `theta` radians from the unperturbed normal (Estevez et al. 2019, as Mitsuba 3 uses it).
-fn shadowing(a: f64, theta: f64) -> f64 {
-    let alpha2 = (a.tan().powi(2) / 8.0).min(1.0);
-    2.0 / (1.0 + (1.0 + alpha2 * theta.tan().powi(2)).sqrt())
-}
-
-/// `ρ/π ∫ max(0, l·n) G(l) dω` over the upper hemisphere, `n` tilted by `a` (midpoint rule).
-/// With `shadowed = false`, the sky-view factor `ρ (1 + cos a)/2` of a tilted plane.
-fn albedo_quadrature(rho: f64, a: f64, shadowed: bool) -> f64 {
-    let (n_theta, n_phi) = (1500, 1500);
-    let normal = [a.sin(), 0.0, a.cos()];
-    let mut sum = 0.0;
-    for i in 0..n_theta {
-        let theta = (i as f64 + 0.5) / n_theta as f64 * std::f64::consts::FRAC_PI_2;
-        let g = if shadowed { shadowing(a, theta) } else { 1.0 };
-        for j in 0..n_phi {
-            let phi = (j as f64 + 0.5) / n_phi as f64 * std::f64::consts::TAU;
-            let l = [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()];
-            let cos = l[0] * normal[0] + l[1] * normal[1] + l[2] * normal[2];
-            sum += cos.max(0.0) * g * theta.sin();
-        }
-    }
-    let cell = std::f64::consts::FRAC_PI_2 / n_theta as f64 * std::f64::consts::TAU / n_phi as f64;
-    rho / std::f64::consts::PI * sum * cell
 }
 
 /// Mean of `value · cos / pdf` over `samples` BSDF samples (the directional albedo).
@@ -101,7 +75,7 @@ fn mapped_diffuse_albedo_is_mitsubas() {
     for (k, a) in [0.3f32, 0.9, 1.3].into_iter().enumerate() {
         let material = tilted(a, diffuse(rho));
         let point = point(&material);
-        let expected = albedo_quadrature(f64::from(rho), f64::from(a), true);
+        let expected = tilted_diffuse_albedo(f64::from(rho), f64::from(a), true);
         // Above the tilted normal, and 80° from the normal on the side it tilts away from.
         for (m, fixed) in
             [Vec3::new(0.2, 0.1, 0.95), Vec3::new(-(1.4f32.sin()), 0.0, 1.4f32.cos())].into_iter().enumerate()
@@ -114,9 +88,9 @@ fn mapped_diffuse_albedo_is_mitsubas() {
             let what = format!("a = {a}, fixed {fixed}: {} vs {expected} (± {tolerance})", stats.mean());
             assert!((stats.mean() - expected).abs() < tolerance, "{what}");
             if k > 0 {
-                let unshadowed = albedo_quadrature(f64::from(rho), f64::from(a), false);
+                let unshadowed = tilted_diffuse_albedo(f64::from(rho), f64::from(a), false);
                 assert!((stats.mean() - unshadowed).abs() > tolerance, "{what}: the unshadowed value passes");
-                let smaller = albedo_quadrature(f64::from(rho), 0.98 * f64::from(a), true);
+                let smaller = tilted_diffuse_albedo(f64::from(rho), 0.98 * f64::from(a), true);
                 assert!((stats.mean() - smaller).abs() > tolerance, "{what}: a 2 % smaller tilt passes");
             }
         }
@@ -180,4 +154,22 @@ fn mirrored_sampler_matches_its_pdf() {
         );
         assert_chi2(&outcome, testkit::sidak(1e-3, 2), &format!("mirrored rough conductor ({mode:?})"));
     }
+}
+
+/// Without the adapter (pbrt's maps, or Mitsuba's flags off) a tilted Lambertian surface
+/// reflects the unshadowed sky-view factor, and a camera direction below the tilted normal
+/// scatters nothing.
+#[test]
+fn maps_without_the_adapter_are_plain() {
+    let (rho, a) = (0.8, 0.9f32);
+    let Material::NormalMap { normals, nested, .. } = tilted(a, diffuse(rho)) else { unreachable!() };
+    let material = Material::NormalMap { normals, nested, options: MapOptions::NONE };
+    let point = point(&material);
+    let bsdf = Bsdf::new(&material, &point, Vec3::new(0.2, 0.1, 0.95).normalize(), TransportMode::Radiance);
+    let stats = albedo(&bsdf.expect("a BSDF"), 200_000, 3);
+    let expected = tilted_diffuse_albedo(f64::from(rho), f64::from(a), false);
+    let tolerance = 4.5 * stats.std_error();
+    assert!((stats.mean() - expected).abs() < tolerance, "{} vs {expected} (± {tolerance})", stats.mean());
+    let below = Vec3::new(-(1.4f32.sin()), 0.0, 1.4f32.cos());
+    assert!(Bsdf::new(&material, &point, below, TransportMode::Radiance).is_none());
 }

@@ -104,10 +104,15 @@ impl ModelBsdf {
         let cos_fixed_geometric = fixed.dot(geometric);
         // A perturbed normal is mirrored for a camera-side direction below it (in importance
         // mode: for a fixed direction that cannot scatter about it, see `evaluate`).
-        let adapter = material.perturbs_shading_normal().then(|| MapAdapter::new(geometric, shading));
+        let adapter = match material {
+            Material::NormalMap { options, .. } | Material::BumpMap { options, .. } => {
+                Some(MapAdapter::new(geometric, shading, *options))
+            }
+            _ => None,
+        };
         let flipped = match (adapter, mode) {
             (Some(a), TransportMode::Radiance) => a.flips_for(fixed),
-            (Some(_), TransportMode::Importance) => !consistent(cos_fixed_geometric, fixed.dot(shading)),
+            (Some(a), TransportMode::Importance) => a.sampler_flips_for(fixed),
             (None, _) => false,
         };
         if let Some(a) = adapter {
@@ -270,8 +275,7 @@ impl ModelBsdf {
         match self.mode {
             TransportMode::Radiance => {
                 let mut eval = self.evaluate_in_frame(generated)?;
-                let sampler_flipped = !consistent(generated.dot(self.geometric), generated.dot(adapter.normal(false)));
-                if sampler_flipped != self.flipped {
+                if adapter.sampler_flips_for(generated) != self.flipped {
                     eval.pdf.reverse = PdfW(0.0);
                 }
                 eval.value *= adapter.shadowing(generated);

@@ -103,6 +103,7 @@ pub use bsdf::Bsdf;
 pub use bump_map::luminance_gradient;
 pub use description::Material;
 pub use fresnel::fresnel_dielectric;
+pub use map_adapter::MapOptions;
 pub use perturb::SurfaceTangents;
 pub use principled::PrincipledParameters;
 pub use principled_thin::PrincipledThinParameters;
