@@ -104,16 +104,29 @@ fn render_with(description: &SceneDescription, iterations: u64, algorithm: &str)
     (stats, last)
 }
 
-/// The expected image value of the plane with its shading normal tilted by `a` radians.
+/// The expected image value of the plane with its shading normal tilted by `a` radians
+/// (pbrt's maps, and Mitsuba's without `use_shadowing_function`).
 fn sky_view(a: f64) -> f64 {
     RHO * (1.0 + a.cos()) / 2.0
 }
 
+/// The expected image value of the plane with its shading normal tilted by `a` radians under
+/// Mitsuba's shadowing function (the default).
+fn shadowed(a: f64) -> f64 {
+    testkit::mitsuba_maps::tilted_diffuse_albedo(RHO, a, true)
+}
+
 /// A raw-constant normal map tilting by `a` radians about the surface's v direction.
 fn tilted_normal_map(a: f64) -> String {
+    tilted_normal_map_with(a, "")
+}
+
+/// [`tilted_normal_map`] with extra properties `extra` (XML).
+fn tilted_normal_map_with(a: f64, extra: &str) -> String {
     format!(
         r#"<bsdf type="normalmap">
             <texture name="normalmap" type="rawconstant"><vector name="value" value="{}, 0.5, {}"/></texture>
+            {extra}
             {{}}
         </bsdf>"#,
         0.5 + 0.5 * a.sin(),
@@ -168,7 +181,9 @@ fn identity_normal_map_renders_the_plain_image() {
 }
 
 /// Normal maps tilting by 0.5 and 1.0 rad, and a bump map whose height ramp tilts by 45°, each
-/// against `ρ (1 + cos a)/2`; each also rejects the untilted value.
+/// against `ρ/π ∫ max(0, l·n) G(l) dω` with Mitsuba's shadowing `G` (the default), and a
+/// normal map without it against `ρ (1 + cos a)/2`; each also rejects the untilted value, and
+/// the shadowed ones the unshadowed value.
 #[test]
 fn tilted_planes_reflect_the_sky_view_factor() {
     let dir = temp_dir();
@@ -187,21 +202,28 @@ fn tilted_planes_reflect_the_sky_view_factor() {
             </texture>
             {}
         </bsdf>"#;
+    let unshadowed = r#"<boolean name="use_shadowing_function" value="false"/>"#;
     let cases = [
-        ("normal map 0.5 rad", tilted_normal_map(0.5), 0.5),
-        ("normal map 1.0 rad", tilted_normal_map(1.0), 1.0),
-        ("bump map 45°", bump.to_string(), std::f64::consts::FRAC_PI_4),
+        ("normal map 0.5 rad", tilted_normal_map(0.5), shadowed(0.5)),
+        ("normal map 1.0 rad", tilted_normal_map(1.0), shadowed(1.0)),
+        ("bump map 45°", bump.to_string(), shadowed(std::f64::consts::FRAC_PI_4)),
+        ("unshadowed normal map 1.0 rad", tilted_normal_map_with(1.0, unshadowed), sky_view(1.0)),
     ];
     let alpha = sidak(1e-4, cases.len());
-    for (name, wrapper, a) in cases {
+    for (name, wrapper, expected) in cases {
         let description = load_in(&dir, &plane_scene(&wrapper)).unwrap_or_else(|(e, _)| panic!("{e}"));
         let (stats, _) = render(&description, 64);
         let (mean, se) = (stats.mean(), stats.std_error());
-        let p = z_test_p(mean - sky_view(a), se);
-        assert!(p > alpha, "{name}: {mean} ± {se} vs {} (p = {p:.2e})", sky_view(a));
+        let p = z_test_p(mean - expected, se);
+        assert!(p > alpha, "{name}: {mean} ± {se} vs {expected} (p = {p:.2e})");
         let p_flat = z_test_p(mean - RHO, se);
         assert!(p_flat < 1e-6, "{name}: not distinguishable from the untilted plane (p = {p_flat:.2e})");
     }
+    // The shadowing is resolved: the 1.0 rad map is not the unshadowed value.
+    let description = load_in(&dir, &plane_scene(&tilted_normal_map(1.0))).unwrap_or_else(|(e, _)| panic!("{e}"));
+    let (stats, _) = render(&description, 64);
+    let p = z_test_p(stats.mean() - sky_view(1.0), stats.std_error());
+    assert!(p < 1e-6, "the shadowing is not resolved: {} vs {} (p = {p:.2e})", stats.mean(), sky_view(1.0));
 }
 
 /// pbrt-v4's `normalmap` (an image, read linear) and `displacement` (a float texture) on a
@@ -325,8 +347,9 @@ Shape "sphere"
 }
 
 /// Light sub-paths see the perturbed normal too (it is the hit's shading normal, stored in the
-/// light vertices, with the adjoint shading-normal factor): light tracing, BPT and VCM render
-/// the normal-mapped plane's `ρ (1 + cos a)/2` as the path tracer does.
+/// light vertices, with the adjoint shading-normal factor and Mitsuba's shadowing on the light
+/// side): light tracing, BPT and VCM render the normal-mapped plane's value as the path tracer
+/// does.
 #[test]
 fn light_paths_see_the_normal_map() {
     let a = 0.9;
@@ -338,8 +361,8 @@ fn light_paths_see_the_normal_map() {
     for algorithm in algorithms {
         let (stats, _) = render_with(&description, 64, algorithm);
         let (mean, se) = (stats.mean(), stats.std_error());
-        let p = z_test_p(mean - sky_view(a), se);
-        assert!(p > alpha, "{algorithm}: {mean} ± {se} vs {} (p = {p:.2e})", sky_view(a));
+        let p = z_test_p(mean - shadowed(a), se);
+        assert!(p > alpha, "{algorithm}: {mean} ± {se} vs {} (p = {p:.2e})", shadowed(a));
         let p_flat = z_test_p(mean - RHO, se);
         assert!(p_flat < 1e-6, "{algorithm}: {mean} ± {se}, not distinguishable from the untilted plane");
     }

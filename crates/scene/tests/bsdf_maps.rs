@@ -1,24 +1,23 @@
 //! Normal and bump maps (Mitsuba's `normalmap`, `bumpmap`): the perturbed shading normal
 //! against closed forms, the gradient of an image texture against the slope of a ramp, and the
-//! BSDF of a mapped material (its sampler against its pdf, and its energy against the tilted
-//! surface's sky-view factor `(1 + cos a)/2`).
+//! BSDF of a mapped material (its sampler against its pdf; its energy is in `map_adapter.rs`).
 
 use scene::microfacet::Distribution;
 use std::sync::Arc;
 
 use math::{Frame, Rng, Vec2, Vec3};
 use scene::desc::{TextureImage, UvTransform};
-use scene::material::{SurfaceTangents, luminance_gradient};
+use scene::material::{MapOptions, SurfaceTangents, luminance_gradient};
 use scene::{Bsdf, FilterMode, Material, Sampling, ShadingPoint, Texture, TransportMode, WrapMode};
 use spectrum::Rgb;
-use testkit::{MeanVar, assert_chi2, chi2_sphere};
+use testkit::{assert_chi2, chi2_sphere};
 
 fn diffuse(rho: f32) -> Material {
     Material::Diffuse { reflectance: Texture::Constant(Rgb::splat(rho)) }
 }
 
 fn normal_map(value: Rgb, nested: Material) -> Material {
-    Material::NormalMap { normals: Texture::Constant(value), nested: Box::new(nested) }
+    Material::NormalMap { normals: Texture::Constant(value), nested: Box::new(nested), options: MapOptions::MITSUBA }
 }
 
 /// The encoded tangent-space normal tilted by `a` radians from `n` towards `s`.
@@ -110,6 +109,7 @@ fn bump_map_of_a_ramp_tilts_a_plane_by_its_slope() {
         height: Texture::bitmap(ramp(16, slope), UvTransform::IDENTITY, clamp),
         scale,
         nested: Box::new(diffuse(0.5)),
+        options: MapOptions::MITSUBA,
     };
     // The plane z = 0 with p = (2u, 3v, 0).
     let t = SurfaceTangents {
@@ -175,45 +175,6 @@ fn normal_mapped_rough_conductor_sampler_matches_its_pdf() {
             32,
         );
         assert_chi2(&outcome, testkit::sidak(1e-3, 2), &format!("normal-mapped rough conductor ({mode:?})"));
-    }
-}
-
-/// Mean of `value · cos / pdf` over `samples` BSDF samples (the directional albedo).
-fn albedo(bsdf: &Bsdf, samples: u32, seed: u64) -> MeanVar {
-    let mut rng = Rng::for_stream(seed, 0, 0);
-    let mut stats = MeanVar::new();
-    for _ in 0..samples {
-        let weight =
-            bsdf.sample(rng.uniform3()).map_or(0.0, |s| f64::from(s.value.r * s.cos_generated / s.pdf.forward.0));
-        stats.push(weight);
-    }
-    stats
-}
-
-/// A Lambertian surface whose normal map tilts the shading normal by `a` reflects
-/// `ρ (1 + cos a)/2` in radiance mode: the part of the tilted cosine lobe above the geometric
-/// tangent plane (the sky-view factor of a tilted plane). Each sample's weight is ρ or 0, so
-/// the standard error is exact.
-#[test]
-fn normal_mapped_diffuse_reflects_the_sky_view_factor() {
-    let rho = 0.8;
-    let samples = 200_000;
-    for (k, a) in [0.3f32, 0.9, 1.3].into_iter().enumerate() {
-        let material = normal_map(tilted(a), diffuse(rho));
-        let point = mapped_point(&material, &flat_tangents());
-        let fixed = Vec3::new(0.2, 0.1, 0.95).normalize();
-        let bsdf = Bsdf::new(&material, &point, fixed, TransportMode::Radiance).expect("a BSDF");
-        let stats = albedo(&bsdf, samples, 7 + k as u64);
-        let view = |a: f32| f64::from(rho) * (1.0 + f64::from(a).cos()) / 2.0;
-        // 4.5 standard errors: three tests at a family-wise level ~2e-5.
-        let tolerance = 4.5 * stats.std_error();
-        let what = format!("a = {a}: {} vs {} (± {tolerance})", stats.mean(), view(a));
-        assert!((stats.mean() - view(a)).abs() < tolerance, "{what}");
-        // The untilted surface, and for the larger angles a 2 % smaller tilt, are rejected.
-        assert!((stats.mean() - f64::from(rho)).abs() > tolerance, "{what}: the tilt is not resolved");
-        if k > 0 {
-            assert!((stats.mean() - view(0.98 * a)).abs() > tolerance, "{what}: a 2 % smaller tilt passes");
-        }
     }
 }
 

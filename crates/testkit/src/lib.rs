@@ -6,12 +6,15 @@
 //! - [`stats`]: running mean and variance ([`MeanVar`]), two-sided z-tests ([`z_test_p`]), the
 //!   Šidák correction for families of tests ([`sidak`]) and entry-by-entry comparisons of two
 //!   estimates such as two images ([`z_test_entries`]).
+//! - [`mitsuba_maps`]: Mitsuba's normal- and bump-mapped Lambertian surfaces in closed form and
+//!   by quadrature.
 //!
 //! Every test is deterministic: samplers draw from a [`math::Rng`] seeded by the caller, so a
 //! test that passes once passes always. Choose significance levels (say `1e-3`, Šidák-corrected
 //! for several tests) so that a correct sampler fails only on an unlucky seed.
 
 pub mod chi2;
+pub mod mitsuba_maps;
 pub mod stats;
 
 pub use chi2::{

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use math::Vec2;
 use scene::desc::{TextureImage, UvTransform};
-use scene::material::Material;
+use scene::material::{MapOptions, Material};
 use scene::microfacet::Distribution;
 use scene::{FilterMode, Sampling, Texture, WrapMode};
 use spectrum::Rgb;
@@ -503,7 +503,8 @@ impl<'a> Loader<'a> {
     /// `<bsdf type="normalmap">` (a texture `normalmap` of tangent-space normals, raw data) or
     /// `<bsdf type="bumpmap">` (one nested texture of any name, its luminance the height, and
     /// `scale`, default 1), each around exactly one nested BSDF. They must be the outermost
-    /// BSDF of a shape.
+    /// BSDF of a shape. `flip_invalid_normals` and `use_shadowing_function` (default true)
+    /// switch Mitsuba's per-query adapter ([`MapOptions`]).
     fn perturbing(&mut self, p: &Plugin<'a>) -> Result<Material, SceneError> {
         let texture = if p.ty == "normalmap" {
             if p.named_object("normalmap").is_none() && !p.has("normalmap") {
@@ -524,14 +525,18 @@ impl<'a> Loader<'a> {
             return Err(p.error("needs exactly one nested BSDF"));
         };
         let nested = Box::new(nested);
+        let options = MapOptions {
+            flip_invalid_normals: p.boolean_or("flip_invalid_normals", true)?,
+            shadowing: p.boolean_or("use_shadowing_function", true)?,
+        };
         let material = if p.ty == "normalmap" {
-            Material::NormalMap { normals: texture, nested }
+            Material::NormalMap { normals: texture, nested, options }
         } else {
             let scale = p.float_or("scale", 1.0)?;
             if !scale.is_finite() {
                 return Err(p.error(format!("'scale' must be a finite number, got {scale}")));
             }
-            Material::BumpMap { height: texture, scale: scale as f32, nested }
+            Material::BumpMap { height: texture, scale: scale as f32, nested, options }
         };
         material.validate().map_err(|e| p.error(e))?;
         Ok(material)

@@ -1054,11 +1054,11 @@ impl Builder {
                 };
                 let normals =
                     Texture::bitmap(image, to_uv, Sampling { wrap: WrapMode::Repeat, filter: FilterMode::Bilinear });
-                Material::NormalMap { normals, nested }
+                Material::NormalMap { normals, nested, options: scene::material::MapOptions::NONE }
             }
             (None, Some(_)) => {
                 let height = self.spectrum_texture(p, "displacement", Rgb::BLACK, false)?;
-                Material::BumpMap { height, scale: 1.0, nested }
+                Material::BumpMap { height, scale: 1.0, nested, options: scene::material::MapOptions::NONE }
             }
         };
         let pos = p.params.first().map_or(d.pos, |x| x.pos);

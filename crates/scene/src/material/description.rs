@@ -7,6 +7,7 @@ use spectrum::ior::Ior;
 
 use super::MAX_COMPONENTS;
 use super::coated_parameters::CoatedParameters;
+use super::map_adapter::MapOptions;
 use super::principled::PrincipledParameters;
 use super::principled_thin::PrincipledThinParameters;
 use super::reference::ReferenceMaterial;
@@ -182,6 +183,8 @@ pub enum Material {
         normals: Texture,
         /// The material whose shading normal is replaced.
         nested: Box<Material>,
+        /// Mitsuba's per-query adapter ([`MapOptions::MITSUBA`] for Mitsuba files).
+        options: MapOptions,
     },
     /// Mitsuba's `bumpmap`: `nested` with its shading normal tilted by the gradient of a height
     /// texture (see `material/bump_map.rs`). Only as the outermost material.
@@ -192,6 +195,8 @@ pub enum Material {
         scale: f32,
         /// The material whose shading normal is perturbed.
         nested: Box<Material>,
+        /// Mitsuba's per-query adapter ([`MapOptions::MITSUBA`] for Mitsuba files).
+        options: MapOptions,
     },
     /// Makes a one-sided material two-sided: seen from behind it behaves as `back` (or as
     /// `front` when `back` is `None`) with the normal flipped.

@@ -14,6 +14,7 @@ use super::description::Material;
 use super::diffuse::Diffuse;
 use super::dispatch::Model;
 use super::lobe::Sampled;
+use super::map_adapter::MapAdapter;
 use super::query::{BsdfEval, BsdfSample, PdfPair};
 use super::shading::{ShadingPoint, TransportMode, consistent};
 use crate::texture::TexturePoint;
@@ -35,6 +36,12 @@ pub(super) struct ModelBsdf {
     pub(super) mode: TransportMode,
     /// Shading normal equal to the geometric normal: no shading-normal correction.
     flat: bool,
+    /// The hit's tangent ([`ShadingPoint::tangent`]), to rebuild the frame about another normal.
+    tangent: Vec3,
+    /// A normal- or bump-mapped material's per-query adapter (see [`super::map_adapter`]).
+    adapter: Option<MapAdapter>,
+    /// Whether `frame` uses the adapter's mirrored normal.
+    flipped: bool,
     pub(super) continuation: f32,
     /// Total selection probability of the non-delta lobes.
     pub(super) non_delta_probability: f32,
@@ -94,9 +101,25 @@ impl ModelBsdf {
         } else if cos_normals < 0.0 {
             shading = -shading;
         }
+        let cos_fixed_geometric = fixed.dot(geometric);
+        // A perturbed normal is mirrored for a camera-side direction below it (in importance
+        // mode: for a fixed direction that cannot scatter about it, see `evaluate`).
+        let adapter = match material {
+            Material::NormalMap { options, .. } | Material::BumpMap { options, .. } => {
+                Some(MapAdapter::new(geometric, shading, *options))
+            }
+            _ => None,
+        };
+        let flipped = match (adapter, mode) {
+            (Some(a), TransportMode::Radiance) => a.flips_for(fixed),
+            (Some(a), TransportMode::Importance) => a.sampler_flips_for(fixed),
+            (None, _) => false,
+        };
+        if let Some(a) = adapter {
+            shading = a.normal(flipped);
+        }
         let flat = shading == geometric;
         let frame = ShadingPoint::frame(shading, point.tangent);
-        let cos_fixed_geometric = fixed.dot(geometric);
         let local_fixed = frame.to_local(fixed);
         if !consistent(cos_fixed_geometric, local_fixed.z) {
             return None;
@@ -116,6 +139,9 @@ impl ModelBsdf {
             cos_fixed_geometric,
             mode,
             flat,
+            tangent: point.tangent,
+            adapter,
+            flipped,
             continuation: 0.0,
             non_delta_probability: 0.0,
             delta_probability: 0.0,
@@ -123,7 +149,17 @@ impl ModelBsdf {
             components: [empty; MAX_COMPONENTS],
         };
         bsdf.add(material, TexturePoint { uv: point.uv, attribute: point.attribute }, 1.0, 1.0, hero);
+        bsdf.select_lobes()?;
+        Some(bsdf)
+    }
 
+    /// The lobe and component selection probabilities and the continuation probability for
+    /// the fixed direction; `None` when nothing can be selected.
+    fn select_lobes(&mut self) -> Option<()> {
+        let local_fixed = self.local_fixed;
+        let bsdf = self;
+        bsdf.delta_probability = 0.0;
+        bsdf.non_delta_probability = 0.0;
         let mut total_weight = 0.0;
         let mut albedo = Rgb::BLACK;
         for c in &mut bsdf.components[..bsdf.count] {
@@ -150,6 +186,23 @@ impl ModelBsdf {
         if !positive(bsdf.continuation) {
             return None;
         }
+        Some(())
+    }
+
+    /// This BSDF about the adapter's perturbed normal, mirrored when `flipped` (two-sided
+    /// materials keep the side chosen at construction); `None` without an adapter or when the
+    /// fixed direction cannot scatter about that normal.
+    fn reframed(&self, flipped: bool) -> Option<ModelBsdf> {
+        let adapter = self.adapter?;
+        let mut bsdf = *self;
+        bsdf.frame = ShadingPoint::frame(adapter.normal(flipped), self.tangent);
+        bsdf.local_fixed = bsdf.frame.to_local(self.fixed);
+        if !consistent(self.cos_fixed_geometric, bsdf.local_fixed.z) {
+            return None;
+        }
+        bsdf.flipped = flipped;
+        bsdf.flat = false;
+        bsdf.select_lobes()?;
         Some(bsdf)
     }
 
@@ -211,7 +264,40 @@ impl ModelBsdf {
         }
     }
 
+    /// Evaluates the BSDF for `generated`. With a map adapter, the camera-side direction picks
+    /// the normal and the light-side one the shadowing factor, so that both transport modes
+    /// evaluate one BSDF. The sampler in importance mode keeps only directions whose normal is
+    /// the one it sampled about (the unmirrored one when the fixed direction can scatter
+    /// about it), so the forward pdf there, and the reverse pdf in radiance mode, are zero for
+    /// directions that would pick the other normal.
     pub(super) fn evaluate(&self, generated: Vec3) -> Option<BsdfEval> {
+        let Some(adapter) = self.adapter else { return self.evaluate_in_frame(generated) };
+        match self.mode {
+            TransportMode::Radiance => {
+                let mut eval = self.evaluate_in_frame(generated)?;
+                if adapter.sampler_flips_for(generated) != self.flipped {
+                    eval.pdf.reverse = PdfW(0.0);
+                }
+                eval.value *= adapter.shadowing(generated);
+                Some(eval)
+            }
+            TransportMode::Importance => {
+                let flipped = adapter.flips_for(generated);
+                let mut eval = if flipped == self.flipped {
+                    self.evaluate_in_frame(generated)?
+                } else {
+                    let mut eval = self.reframed(flipped)?.evaluate_in_frame(generated)?;
+                    eval.pdf.forward = PdfW(0.0);
+                    eval
+                };
+                eval.value *= adapter.shadowing(self.fixed);
+                Some(eval)
+            }
+        }
+    }
+
+    /// [`Self::evaluate`] in this BSDF's shading frame, without the map adapter.
+    fn evaluate_in_frame(&self, generated: Vec3) -> Option<BsdfEval> {
         if self.non_delta_probability <= 0.0 {
             return None;
         }
@@ -306,7 +392,17 @@ impl ModelBsdf {
                 if !consistent(cos_geometric, local.z) || rho.is_black() {
                     return None;
                 }
-                let value = rho * (c.scale * self.shading_factor(local.z, cos_geometric) / local.z.abs());
+                let mut value = rho * (c.scale * self.shading_factor(local.z, cos_geometric) / local.z.abs());
+                match (self.adapter, self.mode) {
+                    (None, _) => {}
+                    (Some(a), TransportMode::Radiance) => value *= a.shadowing(world),
+                    (Some(a), TransportMode::Importance) => {
+                        if a.flips_for(world) != self.flipped {
+                            return None;
+                        }
+                        value *= a.shadowing(self.fixed);
+                    }
+                }
                 let pdf = PdfW(probability / total);
                 Some(BsdfSample {
                     direction: world,

@@ -61,7 +61,8 @@
 //!
 //! Normal and bump maps (`normal_map`, `bump_map`, dispatched in `perturb`) are not BSDFs but
 //! perturbations of the shading normal, which the scene applies when it builds a hit; their
-//! BSDF is the nested material's.
+//! BSDF is the nested material's, with Mitsuba's per-query adapter (`map_adapter`: the normal
+//! mirrored for a camera-side direction below it, and a shadowing factor on the light side).
 //!
 //! **Adding a model** is one new file (a struct implementing `dispatch::LeafModel`), one arm in
 //! `dispatch::Model` and in its `each_model!` macro, the `from_leaf` arm, the [`Material`]
@@ -88,6 +89,7 @@ mod fresnel;
 mod layered_interfaces;
 mod layered_walk;
 mod lobe;
+mod map_adapter;
 mod mixture;
 mod normal_map;
 mod perturb;
@@ -108,6 +110,7 @@ pub use bump_map::luminance_gradient;
 pub use coated_parameters::{CoatedBase, CoatedParameters, CoatingInterface, CoatingLayer, ConductorIor};
 pub use description::Material;
 pub use fresnel::fresnel_dielectric;
+pub use map_adapter::MapOptions;
 pub use perturb::SurfaceTangents;
 pub use principled::PrincipledParameters;
 pub use principled_thin::PrincipledThinParameters;
