@@ -167,13 +167,23 @@ fn judge_case(
     SceneStatus::Rendered(outcomes)
 }
 
-/// The reference image and the variance of its pixel means (the file's per-sample variance
-/// divided by `reference_spp`).
+/// Mitsuba's own render test floors the reference's per-sample variance at this value before
+/// its Z-test (`reference_var = np.maximum(reference_var, 1e-4)` in mitsuba3's
+/// `src/render/tests/test_renders.py`): its variance images hold tiny negative values where the
+/// image is exactly 0, which would otherwise make z = ±1000 for a render that is exactly right.
+pub(crate) const REFERENCE_VARIANCE_FLOOR: f64 = 1e-4;
+
+/// The reference image and the variance of its pixel means (the file's per-sample variance,
+/// floored at [`REFERENCE_VARIANCE_FLOOR`] as Mitsuba's test does, divided by `reference_spp`).
 fn read_reference(case: &Case, reference_spp: f64) -> Result<(io::Image, io::Image)> {
     let image = io::read_image(&case.reference)?;
     let mut variance = io::read_image(&case.reference_variance)?;
     for pixel in &mut variance.pixels {
-        *pixel = pixel.map(|v| (f64::from(v) / reference_spp) as f32);
+        // NaN stays NaN: the verdict leaves such entries out and counts them.
+        *pixel = pixel.map(|v| {
+            let v = f64::from(v);
+            (if v.is_nan() { v } else { v.max(REFERENCE_VARIANCE_FLOOR) } / reference_spp) as f32
+        });
     }
     Ok((image, variance))
 }

@@ -136,7 +136,8 @@ impl Table {
             "Each scene is rendered at its file's resolution with every algorithm, with the variance of \
              each pixel mean estimated from the spread of the iterations (as `vcm render --variance`). \
              For every pixel channel, z = (a − b) / sqrt(var_a + var_b), where var_b is the reference's \
-             per-sample variance divided by the reference's sample count ({}); entries whose variances \
+             per-sample variance, floored at 1e-4 as Mitsuba's own render test does, divided by the \
+             reference's sample count ({}); entries whose variances \
              are both zero get `vcm compare`'s floor of {} of the value. An entry passes when its \
              two-sided p-value is at least the Šidák level 1 − (1 − α)^(1/n) with α = {} over the n \
              pixel channels. A cell reads PASS iff at least {} % of the entries pass **and** every \
