@@ -1030,7 +1030,8 @@ mod tests {
 
     #[test]
     fn global_radius_keeps_the_expected_vertices_per_query_above_512_squared() {
-        let settings = |mode| VcmSettings { radius_mode: mode, ..VcmSettings::new(VcmAlgorithm::VertexConnectionMerging) };
+        let settings =
+            |mode| VcmSettings { radius_mode: mode, ..VcmSettings::new(VcmAlgorithm::VertexConnectionMerging) };
         let radius = |w: u32, h: u32, mode| base_radius(&scene::cornell::build(0, w, h).unwrap(), &settings(mode));
         let unscaled = radius(64, 64, RadiusMode::Fixed);
         assert!(unscaled > 0.0);
