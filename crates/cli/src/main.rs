@@ -6,6 +6,8 @@ mod bench;
 mod bench_accel;
 mod compare;
 mod conformance;
+#[cfg(feature = "mpi")]
+mod mpi;
 mod report;
 
 use render::path_tracer::{Heuristic, RussianRoulette};
@@ -262,10 +264,12 @@ fn install_interrupt_handler() {
 
 /// Prints a session's notices on stderr (progress ones unless `--quiet`) and installs the
 /// interrupt handler when rendering starts.
+#[cfg(not(feature = "mpi"))]
 struct Terminal {
     quiet: bool,
 }
 
+#[cfg(not(feature = "mpi"))]
 impl session::Observer for Terminal {
     fn notice(&mut self, notice: Notice) {
         if !(self.quiet && matches!(notice, Notice::Progress(_))) {
@@ -328,9 +332,14 @@ fn run_render(args: RenderArgs) -> Result<()> {
         heuristic: args.heuristic,
         film: args.film,
     };
-    let outcome = session::render(&request, Some(&STOP), &mut Terminal { quiet: args.quiet })?;
-    eprintln!("{}", outcome.summary);
-    Ok(())
+    #[cfg(feature = "mpi")]
+    return mpi::render(&request, &STOP, args.quiet);
+    #[cfg(not(feature = "mpi"))]
+    {
+        let outcome = session::render(&request, Some(&STOP), &mut Terminal { quiet: args.quiet })?;
+        eprintln!("{}", outcome.summary);
+        Ok(())
+    }
 }
 
 /// Parses `--rr-depth`.

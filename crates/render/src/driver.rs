@@ -251,6 +251,12 @@ impl<'a> Renderer<'a> {
         rejected
     }
 
+    /// Makes `iteration` the next iteration to render (any index: an iteration is a function
+    /// of the seed and its index, so a distributed render starts each rank anywhere).
+    pub fn seek(&mut self, iteration: u64) {
+        self.iteration = iteration;
+    }
+
     /// The frame of the last iteration.
     pub fn frame(&self) -> &FrameBuffer {
         &self.frame

@@ -8,10 +8,12 @@
 //! * [`fluorescent`]: wavelength shifts at fluorescent vertices, shared by all integrators.
 //! * [`hash_grid`]: the range search for vertex merging.
 //! * [`splat_frame`]: camera samples splatted over the pixels their filter reaches.
+//! * [`distributed`]: one render over several ranks (MPI), bit-identical to one process.
 //! * [`driver`]: the integrators behind one interface, threads, determinism; `render_with`.
 //! * [`progressive`]: one iteration at a time into the film, and the budget loop with
 //!   checkpoints and progress (every front end's loop).
 
+pub mod distributed;
 pub mod driver;
 pub mod eye_light;
 pub mod fluorescent;

@@ -15,8 +15,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use scene::{Film, FrameBuffer, Scene};
 
 use crate::driver::{Budget, RenderOutput, RenderSettings, Renderer, SaveFilm};
-use crate::vcm::technique_images::{TechniqueImages, TechniqueLayout};
-use crate::vcm::{Family, RejectedCounts};
+use crate::vcm::technique_images::{TechniqueFrame, TechniqueImages, TechniqueLayout};
+use crate::vcm::{Family, FamilyValues, IterationStats, RejectedCounts};
+use spectrum::Rgb;
 
 /// A progressive render of a borrowed scene: the integrator with its state, the film and the
 /// optional per-technique images.
@@ -28,7 +29,28 @@ pub struct Progressive<'a> {
     family_frame: FrameBuffer,
     technique_images: Option<TechniqueImages>,
     rejected_by_family: Option<RejectedCounts>,
+    /// Statistics of the last added iteration (VCM engine only).
+    last_stats: Option<IterationStats>,
     elapsed: Duration,
+}
+
+/// One rendered iteration, not yet in the film: what [`Progressive::add_result`] adds. A
+/// distributed render sends it between ranks ([`crate::distributed`]).
+#[derive(Clone, Debug)]
+pub struct IterationResult {
+    /// The global iteration index (0-based).
+    pub iteration: u64,
+    /// The iteration's frame (radiance estimates per pixel, one sample per pixel).
+    pub frame: FrameBuffer,
+    /// Rejected (non-finite) samples of the iteration.
+    pub rejected: u64,
+    /// The VCM engine's statistics of the iteration (`None` for the other integrators).
+    pub stats: Option<IterationStats>,
+    /// Per-pixel values per technique family, when family films are recorded.
+    pub family_values: Option<Vec<FamilyValues>>,
+    /// Per-pixel values per (s, t) technique (`TechniqueFrame::values` layout), when technique
+    /// images are recorded.
+    pub technique_values: Option<Vec<Rgb>>,
 }
 
 impl<'a> Progressive<'a> {
@@ -80,25 +102,80 @@ impl<'a> Progressive<'a> {
             family_frame: FrameBuffer::new(0, 0),
             technique_images,
             rejected_by_family: None,
+            last_stats: None,
             elapsed: Duration::ZERO,
         })
     }
 
-    /// Renders the next iteration and adds it to the film (and the technique images).
+    /// Renders the next iteration (index [`Progressive::iterations`]) and adds it to the film
+    /// (and the technique images): [`Progressive::render_iteration`] then
+    /// [`Progressive::add_result`].
     pub fn step(&mut self) -> Result<(), String> {
         let start = Instant::now();
+        let result = self.render_iteration(self.film.iterations());
+        self.add_result(&result)?;
+        self.elapsed += start.elapsed();
+        Ok(())
+    }
+
+    /// Renders global iteration `iteration` (any index: a function of the seed and the index
+    /// only) without touching the film; [`Progressive::add_result`] adds it.
+    pub fn render_iteration(&mut self, iteration: u64) -> IterationResult {
+        self.renderer.seek(iteration);
         let rejected = self.renderer.step();
-        self.film.add_iteration(self.renderer.frame(), rejected);
         let engine = self.renderer.vcm_engine();
-        if let Some(engine) = engine {
+        IterationResult {
+            iteration,
+            frame: self.renderer.frame().clone(),
+            rejected,
+            stats: engine.map(|e| e.stats()),
+            family_values: match &self.family_films {
+                Some(_) => engine.and_then(|e| e.family_frames()).map(<[_]>::to_vec),
+                None => None,
+            },
+            technique_values: match &self.technique_images {
+                Some(_) => engine.and_then(|e| e.technique_frame()).map(|f| f.values.clone()),
+                None => None,
+            },
+        }
+    }
+
+    /// Adds one rendered iteration to the film, the family films and the technique images, in
+    /// that order (the additions of a single-process render, bit for bit). The result must be
+    /// the film's next iteration; another index is an error (the film's iteration count is the
+    /// index of the next iteration, so iterations are added in order without gaps).
+    pub fn add_result(&mut self, result: &IterationResult) -> Result<(), String> {
+        if result.iteration != self.film.iterations() {
+            return Err(format!(
+                "internal error: iteration {} added to a film of {} iterations",
+                result.iteration,
+                self.film.iterations()
+            ));
+        }
+        if (result.frame.width, result.frame.height) != (self.film.width(), self.film.height()) {
+            return Err(format!(
+                "iteration {} is {}x{}, the film {}x{}",
+                result.iteration,
+                result.frame.width,
+                result.frame.height,
+                self.film.width(),
+                self.film.height()
+            ));
+        }
+        self.film.add_iteration(&result.frame, result.rejected);
+        if let Some(stats) = result.stats {
             let counts = self.rejected_by_family.get_or_insert_with(Default::default);
-            for (total, r) in counts.iter_mut().zip(engine.stats().rejected_by_family) {
+            for (total, r) in counts.iter_mut().zip(stats.rejected_by_family) {
                 *total += r;
             }
+            self.last_stats = Some(stats);
         }
-        if let (Some(films), Some(values)) = (&mut self.family_films, engine.and_then(|e| e.family_frames())) {
+        if let (Some(films), Some(values)) = (&mut self.family_films, &result.family_values) {
             if self.family_frame.pixels.is_empty() {
                 self.family_frame = FrameBuffer::new(self.film.width(), self.film.height());
+            }
+            if values.len() != self.family_frame.pixels.len() {
+                return Err(format!("iteration {}: family values of another size", result.iteration));
             }
             for (index, family_film) in films.iter_mut().enumerate() {
                 for (pixel, value) in self.family_frame.pixels.iter_mut().zip(values) {
@@ -107,11 +184,26 @@ impl<'a> Progressive<'a> {
                 family_film.add_iteration(&self.family_frame, 0);
             }
         }
-        if let (Some(images), Some(values)) = (&mut self.technique_images, engine.and_then(|e| e.technique_frame())) {
-            images.add_iteration(values)?;
+        if let (Some(images), Some(values)) = (&mut self.technique_images, &result.technique_values) {
+            let frame = TechniqueFrame { layout: images.layout(), values: values.clone() };
+            images.add_iteration(&frame)?;
         }
-        self.elapsed += start.elapsed();
         Ok(())
+    }
+
+    /// Adds wall-clock time to [`Progressive::elapsed`] (a distributed render counts its rounds).
+    pub fn add_elapsed(&mut self, time: Duration) {
+        self.elapsed += time;
+    }
+
+    /// The technique layout when technique images are recorded (decoding a result needs it).
+    pub fn technique_layout(&self) -> Option<TechniqueLayout> {
+        self.technique_images.as_ref().map(TechniqueImages::layout)
+    }
+
+    /// Whether family films are recorded.
+    pub fn records_families(&self) -> bool {
+        self.family_films.is_some()
     }
 
     /// The accumulated film (a resumed film's iterations included).
@@ -146,7 +238,7 @@ impl<'a> Progressive<'a> {
 
     /// The render's result.
     pub fn into_output(self, interrupted: bool) -> RenderOutput {
-        let vcm_stats = self.renderer.vcm_engine().map(|e| e.stats());
+        let vcm_stats = self.last_stats.or_else(|| self.renderer.vcm_engine().map(|e| e.stats()));
         RenderOutput {
             threads: self.renderer.threads(),
             film: self.film,
@@ -216,7 +308,7 @@ pub fn run_budget(
 }
 
 /// A progress bar on stderr when asked for and stderr is a terminal.
-fn progress_bar(settings: &RenderSettings) -> Option<ProgressBar> {
+pub(crate) fn progress_bar(settings: &RenderSettings) -> Option<ProgressBar> {
     if !settings.progress || !std::io::stderr().is_terminal() {
         return None;
     }

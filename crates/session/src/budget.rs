@@ -26,9 +26,13 @@ pub fn run_budget(
     stop: Option<&AtomicBool>,
     checkpoint: Option<Checkpointing>,
 ) -> Result<bool> {
-    let checkpoint = checkpoint.map(|(path, every, recorded)| {
-        let save = move |film: &scene::Film| checkpoint::save(path, recorded, film).map_err(|e| format!("{e:#}"));
-        (every, Box::new(save) as SaveFilm)
-    });
+    let checkpoint = checkpoint.map(checkpoint_saver);
     render::progressive::run_budget(progressive, settings, stop, checkpoint).map_err(anyhow::Error::msg)
+}
+
+/// The render crate's form of a session checkpoint: the interval and a callback that saves the
+/// film with what the session records.
+pub fn checkpoint_saver<'a>((path, every, recorded): Checkpointing<'a>) -> (Duration, SaveFilm<'a>) {
+    let save = move |film: &scene::Film| checkpoint::save(path, recorded, film).map_err(|e| format!("{e:#}"));
+    (every, Box::new(save) as SaveFilm)
 }

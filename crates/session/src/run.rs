@@ -7,11 +7,13 @@ use render::Algorithm;
 use render::driver::{Budget, RenderOutput};
 use render::vcm::Family;
 
-use crate::budget::run_budget;
+use crate::budget::{checkpoint_saver, run_budget};
 use crate::outputs::{write_st_images, write_technique_images};
 use crate::prepare::Prepared;
 use crate::request::Request;
 use crate::{Notice, Summary};
+use render::RenderSettings;
+use render::distributed::{Collective, agree, run_distributed};
 use render::progressive::Progressive;
 
 /// Receives what a session tells the user, and when rendering starts.
@@ -36,7 +38,28 @@ pub struct Outcome {
 /// Runs a render session. `stop`, when set (e.g. by a Ctrl-C handler), makes the render
 /// finish its current iteration, write what it has and return (`summary.interrupted`).
 pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn Observer) -> Result<Outcome> {
-    let prepared = Prepared::new(request, observer)?;
+    render_on(request, stop, observer, None)
+}
+
+/// [`render`], spread over the ranks of `ranks` when given ([`render::distributed`]): every
+/// rank calls it with the same request (all ranks parse the same command line, so their
+/// settings cannot differ). Every rank loads the scene; a load error on any rank is every
+/// rank's error. Rank 0 keeps the film, writes the outputs and checkpoints and composes the
+/// summary; on the other ranks the outcome's film is empty and nothing is written. `stop` on
+/// any rank stops every rank after the current round. The image equals [`render`]'s bit for
+/// bit.
+pub fn render_on(
+    request: &Request,
+    stop: Option<&AtomicBool>,
+    observer: &mut dyn Observer,
+    ranks: Option<&dyn Collective>,
+) -> Result<Outcome> {
+    let prepared = Prepared::new(request, observer);
+    let prepared = match ranks {
+        Some(comm) => agree(comm, prepared.map_err(|e| format!("{e:#}"))).map_err(anyhow::Error::msg)?,
+        None => prepared?,
+    };
+    let root = ranks.is_none_or(|comm| comm.rank() == 0);
     observer.starting();
     let Prepared {
         request: r,
@@ -49,11 +72,28 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
         layout,
         record_families,
     } = prepared;
-    let mut progressive =
-        Progressive::new(&scene, &settings, resumed, record_families, layout).map_err(anyhow::Error::msg)?;
+    // Rank 0 continues the resumed film; the others only need its iteration count, which the
+    // distributed loop broadcasts.
+    let resumed = if root { resumed } else { None };
+    let progressive = Progressive::new(&scene, &settings, resumed, record_families, layout);
+    let mut progressive = match ranks {
+        Some(comm) => agree(comm, progressive),
+        None => progressive,
+    }
+    .map_err(anyhow::Error::msg)?;
     let checkpoint = r.checkpoint.as_deref().map(|path| (path, r.checkpoint_every, &recorded));
-    let interrupted = run_budget(&mut progressive, &settings, stop, checkpoint)?;
+    let interrupted = match ranks {
+        Some(comm) => {
+            let checkpoint = checkpoint.filter(|_| root).map(checkpoint_saver);
+            run_distributed(&mut progressive, &settings, stop, checkpoint, comm).map_err(anyhow::Error::msg)?
+        }
+        None => run_budget(&mut progressive, &settings, stop, checkpoint)?,
+    };
     let result = progressive.into_output(interrupted);
+    if !root {
+        let summary = summary(&scene.name, &r, &settings, &result, resumed_iterations, Vec::new(), ranks);
+        return Ok(Outcome { output: result, summary });
+    }
 
     let film = &result.film;
     let (width, height) = (film.width() as usize, film.height() as usize);
@@ -81,8 +121,23 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
     if let Some(path) = &r.checkpoint {
         written.push(format!("checkpoint {}", path.display()));
     }
-    let summary = Summary {
-        scene: scene.name.clone(),
+    let summary = summary(&scene.name, &r, &settings, &result, resumed_iterations, written, ranks);
+    Ok(Outcome { output: result, summary })
+}
+
+/// The summary line of a finished session.
+fn summary(
+    scene: &str,
+    r: &Request,
+    settings: &RenderSettings,
+    result: &RenderOutput,
+    resumed_iterations: Option<u64>,
+    written: Vec<String>,
+    ranks: Option<&dyn Collective>,
+) -> Summary {
+    let film = &result.film;
+    Summary {
+        scene: scene.to_string(),
         algorithm: r.algorithm.name(),
         spectral: settings.spectral,
         resolution: (film.width(), film.height()),
@@ -90,6 +145,7 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
         resumed_after: resumed_iterations,
         seconds: result.elapsed.as_secs_f64(),
         threads: result.threads,
+        ranks: ranks.map(|comm| comm.size()),
         light_vertices: result.light_vertices,
         rejected: film.rejected_samples(),
         rejected_by_family: match result.rejected_by_family {
@@ -100,8 +156,7 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
         },
         interrupted: result.interrupted,
         written,
-    };
-    Ok(Outcome { output: result, summary })
+    }
 }
 
 /// Iterations of a render whose request and scene name no budget.

@@ -20,8 +20,10 @@ pub struct Summary {
     pub resumed_after: Option<u64>,
     /// Wall-clock seconds of this session's iterations.
     pub seconds: f64,
-    /// Worker threads used.
+    /// Worker threads used (per rank when distributed).
     pub threads: usize,
+    /// Ranks of a distributed render (`None`: one process).
+    pub ranks: Option<usize>,
     /// Light vertices stored in the last iteration and bytes per vertex (VCM engine only).
     pub light_vertices: Option<(usize, usize)>,
     /// Non-finite samples discarded, in the whole film.
@@ -45,6 +47,11 @@ impl fmt::Display for Summary {
             Some(n) => format!(" (resumed after {n})"),
             None => String::new(),
         };
+        let ranks = match self.ranks {
+            Some(1) => " x 1 rank".to_string(),
+            Some(n) => format!(" x {n} ranks"),
+            None => String::new(),
+        };
         let rejected = if self.rejected_by_family.is_empty() {
             String::new()
         } else {
@@ -53,7 +60,7 @@ impl fmt::Display for Summary {
         };
         write!(
             f,
-            "{}{} with {}{} at {}x{}: {} iterations{resumed} in {:.2} s ({:.1} ms/iteration, {} threads{vertices}), {} rejected samples{rejected} -> {}",
+            "{}{} with {}{} at {}x{}: {} iterations{resumed} in {:.2} s ({:.1} ms/iteration, {} threads{ranks}{vertices}), {} rejected samples{rejected} -> {}",
             if self.interrupted { "interrupted: " } else { "" },
             self.scene,
             self.algorithm,
