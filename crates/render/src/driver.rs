@@ -236,6 +236,10 @@ impl<'a> Renderer<'a> {
     /// (non-finite) samples.
     pub fn step(&mut self) -> u64 {
         let (scene, seed, iteration) = (self.scene, self.settings.seed, self.iteration);
+        if self.frame.pixels.len() != scene.camera.pixel_count() {
+            // The frame was taken ([`Renderer::take_frame`]) and not given back.
+            self.frame = FrameBuffer::new(scene.camera.width, scene.camera.height);
+        }
         let frame = &mut self.frame;
         let integrator = &mut self.integrator;
         let rejected = self.pool.install(|| match integrator {
@@ -260,6 +264,18 @@ impl<'a> Renderer<'a> {
     /// The frame of the last iteration.
     pub fn frame(&self) -> &FrameBuffer {
         &self.frame
+    }
+
+    /// Takes the frame of the last iteration out without copying it (the next
+    /// [`Renderer::step`] allocates a new one unless it is given back with
+    /// [`Renderer::restore_frame`]).
+    pub fn take_frame(&mut self) -> FrameBuffer {
+        std::mem::replace(&mut self.frame, FrameBuffer::new(0, 0))
+    }
+
+    /// Gives back a frame taken by [`Renderer::take_frame`], to be reused by the next step.
+    pub fn restore_frame(&mut self, frame: FrameBuffer) {
+        self.frame = frame;
     }
 
     /// Iterations rendered so far.

@@ -114,6 +114,8 @@ impl<'a> Progressive<'a> {
         let start = Instant::now();
         let result = self.render_iteration(self.film.iterations());
         self.add_result(&result)?;
+        // The frame goes back to the renderer: one frame per render, not one per iteration.
+        self.renderer.restore_frame(result.frame);
         self.elapsed += start.elapsed();
         Ok(())
     }
@@ -123,10 +125,11 @@ impl<'a> Progressive<'a> {
     pub fn render_iteration(&mut self, iteration: u64) -> IterationResult {
         self.renderer.seek(iteration);
         let rejected = self.renderer.step();
+        let frame = self.renderer.take_frame();
         let engine = self.renderer.vcm_engine();
         IterationResult {
             iteration,
-            frame: self.renderer.frame().clone(),
+            frame,
             rejected,
             stats: engine.map(|e| e.stats()),
             family_values: match &self.family_films {
