@@ -6,6 +6,7 @@ mod bench;
 mod bench_accel;
 mod compare;
 mod conformance;
+mod merge;
 #[cfg(feature = "mpi")]
 mod mpi;
 mod report;
@@ -21,8 +22,10 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use render::Algorithm;
 use render::driver::Budget;
 use render::vcm::RadiusMode;
+use scene::Summation;
 use scene::cornell;
 use scene::filter::FilmMode;
+use session::slice::SliceSpec;
 use session::{LoadedScene, Notice, SceneSource};
 // The per-entry Z-test of `compare` and `conformance`.
 use image_metrics::ztest;
@@ -48,6 +51,8 @@ enum Command {
     Report(report::ReportArgs),
     /// Render Mitsuba 3's render test suite and judge every scene against its reference.
     Conformance(conformance::ConformanceArgs),
+    /// Merge the checkpoints of a render's slices (`vcm render --slice K/N`) into its image.
+    Merge(merge::MergeArgs),
 }
 
 /// Algorithm names as the command line spells them.
@@ -219,6 +224,16 @@ struct RenderArgs {
     /// counts the checkpoint's iterations too. Keeps checkpointing to FILE.
     #[arg(long, value_name = "FILE")]
     resume: Option<PathBuf>,
+    /// How the film adds iterations: `float` (f64 sums, 24 bytes per pixel) or `fixed` (exact
+    /// fixed-point sums, 48 bytes per pixel; the image differs from float's in the last bits
+    /// only) [default: float; fixed with --slice]. See docs/distributed.md.
+    #[arg(long, value_name = "float|fixed", value_parser = parse_summation)]
+    sums: Option<Summation>,
+    /// Render only slice K of N (0-based) of the iterations into --checkpoint FILE, for a
+    /// batch scheduler's array job; `vcm merge` adds the N slices into the image of one
+    /// `vcm render --sums fixed`, bit for bit. See docs/distributed.md.
+    #[arg(long, value_name = "K/N", value_parser = parse_slice)]
+    slice: Option<SliceSpec>,
 }
 
 fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
@@ -331,6 +346,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
         russian_roulette: args.rr_depth,
         heuristic: args.heuristic,
         film: args.film,
+        summation: args.sums,
+        slice: args.slice,
     };
     #[cfg(feature = "mpi")]
     return mpi::render(&request, &STOP, args.quiet);
@@ -350,6 +367,16 @@ fn parse_russian_roulette(text: &str) -> Result<RussianRoulette, String> {
 /// Parses `--film`.
 pub(crate) fn parse_film(text: &str) -> Result<FilmMode, String> {
     FilmMode::from_name(text).ok_or_else(|| format!("expected 'splat' or 'fis', got '{text}'"))
+}
+
+/// Parses `--sums`.
+fn parse_summation(text: &str) -> Result<Summation, String> {
+    Summation::from_name(text).ok_or_else(|| format!("expected 'float' or 'fixed', got '{text}'"))
+}
+
+/// Parses `--slice`.
+fn parse_slice(text: &str) -> Result<SliceSpec, String> {
+    SliceSpec::parse(text).map_err(|e| format!("{e:#}"))
 }
 
 /// Parses `--heuristic`.
@@ -380,6 +407,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => compare::run(args),
         Command::Report(args) => report::run(args).map(|()| ExitCode::SUCCESS),
         Command::Conformance(args) => conformance::run(args).map(|()| ExitCode::SUCCESS),
+        Command::Merge(args) => merge::run(args).map(|()| ExitCode::SUCCESS),
     };
     match outcome {
         Ok(code) => code,

@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use math::Rng;
 use rayon::prelude::*;
-use scene::{Film, FrameBuffer, Scene};
+use scene::{Film, FrameBuffer, Scene, Summation};
 use spectrum::Rgb;
 
 use crate::eye_light;
@@ -101,6 +101,9 @@ pub struct RenderSettings {
     /// [`Film::variance_of_mean`] and checkpoints; without them the render's peak memory is
     /// lower. Default: on.
     pub variance: bool,
+    /// How the film adds iterations ([`Summation::Float`] by default; [`Summation::Fixed`]
+    /// makes films of disjoint iteration ranges mergeable bit for bit).
+    pub summation: Summation,
 }
 
 impl Default for RenderSettings {
@@ -121,6 +124,7 @@ impl Default for RenderSettings {
             heuristic: crate::path_tracer::Heuristic::Balance,
             wavelength_groups: crate::vcm::wavelengths::DEFAULT_WAVELENGTH_GROUPS,
             variance: true,
+            summation: Summation::Float,
         }
     }
 }

@@ -77,9 +77,9 @@ impl<'a> Progressive<'a> {
                 ));
             }
             Some(film) => film,
-            None => Film::with_variance(width, height, settings.variance),
+            None => Film::with_summation(width, height, settings.variance, settings.summation),
         };
-        let mut renderer = Renderer::starting_at(scene, settings, film.iterations())?;
+        let mut renderer = Renderer::starting_at(scene, settings, film.next_iteration())?;
         let fresh = film.iterations() == 0;
         let family_films = match renderer.vcm_engine_mut() {
             Some(engine) if record_families && fresh => {
@@ -107,12 +107,12 @@ impl<'a> Progressive<'a> {
         })
     }
 
-    /// Renders the next iteration (index [`Progressive::iterations`]) and adds it to the film
+    /// Renders the next iteration (index [`Progressive::next_iteration`]) and adds it to the film
     /// (and the technique images): [`Progressive::render_iteration`] then
     /// [`Progressive::add_result`].
     pub fn step(&mut self) -> Result<(), String> {
         let start = Instant::now();
-        let result = self.render_iteration(self.film.iterations());
+        let result = self.render_iteration(self.film.next_iteration());
         self.add_result(&result)?;
         // The frame goes back to the renderer: one frame per render, not one per iteration.
         self.renderer.restore_frame(result.frame);
@@ -148,11 +148,17 @@ impl<'a> Progressive<'a> {
     /// the film's next iteration; another index is an error (the film's iteration count is the
     /// index of the next iteration, so iterations are added in order without gaps).
     pub fn add_result(&mut self, result: &IterationResult) -> Result<(), String> {
-        if result.iteration != self.film.iterations() {
+        if result.iteration != self.film.next_iteration() {
             return Err(format!(
-                "internal error: iteration {} added to a film of {} iterations",
+                "internal error: iteration {} added to a film whose next iteration is {}",
                 result.iteration,
-                self.film.iterations()
+                self.film.next_iteration()
+            ));
+        }
+        if !self.film.has_room() {
+            return Err(format!(
+                "a film with fixed-point sums holds at most {} iterations",
+                Film::FIXED_MAX_ITERATIONS
             ));
         }
         if (result.frame.width, result.frame.height) != (self.film.width(), self.film.height()) {
@@ -219,6 +225,12 @@ impl<'a> Progressive<'a> {
         self.film.iterations()
     }
 
+    /// Global index of the next iteration: the film's first iteration (0 unless it holds a
+    /// slice of a render) plus its iteration count.
+    pub fn next_iteration(&self) -> u64 {
+        self.film.next_iteration()
+    }
+
     /// One film per technique family ([`Family::ALL`] order) when recorded; they sum to the film.
     pub fn family_films(&self) -> Option<&[Film; 5]> {
         self.family_films.as_ref()
@@ -271,10 +283,10 @@ pub fn run_budget(
     let progress = progress_bar(settings);
     let start = Instant::now();
     let mut last_checkpoint = Instant::now();
-    let first_iteration = progressive.iterations();
+    let first_iteration = progressive.next_iteration();
     let mut interrupted = false;
     loop {
-        let iteration = progressive.iterations();
+        let iteration = progressive.next_iteration();
         match settings.budget {
             Budget::Iterations(n) if iteration >= n => break,
             Budget::Time(limit) if iteration > first_iteration && start.elapsed() >= limit => break,

@@ -73,8 +73,8 @@ fn assert_same_film(a: &Film, b: &Film, what: &str) {
     assert_eq!(a.rejected_samples(), b.rejected_samples(), "{what}: rejected");
     // Bit equality of the f64 sums (== on f64 would also accept -0 for +0).
     let bits = |v: &[[f64; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
-    assert!(bits(a.sums()) == bits(b.sums()), "{what}: sums differ");
-    assert!(bits(a.sum_squares()) == bits(b.sum_squares()), "{what}: sums of squares differ");
+    assert!(bits(&a.sums()) == bits(&b.sums()), "{what}: sums differ");
+    assert!(bits(&a.sum_squares()) == bits(&b.sum_squares()), "{what}: sums of squares differ");
 }
 
 #[test]

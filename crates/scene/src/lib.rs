@@ -23,7 +23,7 @@ pub mod texture;
 
 pub use alpha::AlphaMask;
 pub use camera::Camera;
-pub use film::{Film, FrameBuffer};
+pub use film::{Film, FilmSums, FrameBuffer, Summation};
 pub use filter::Filter;
 pub use light::{BoundingSphere, DirectSample, EmissionSample, HitRadiance, Light};
 pub use material::{

@@ -3,16 +3,19 @@
 //! rejected-sample counts. The random streams are keyed by (seed, iteration, path), and the
 //! radius schedule by the iteration index, so a resumed render equals an uninterrupted one.
 //!
-//! Format (version 3): the line `vcm-checkpoint 3`, then `key=value` lines, an empty line, the
-//! sums and then the sums of squares, as little-endian f64 triples, row-major. Files are
-//! written to `FILE.tmp` and renamed over `FILE`, so a crash never leaves a truncated
-//! checkpoint.
+//! Format (version 4): the line `vcm-checkpoint 4`, then `key=value` lines, an empty line, the
+//! sums and then the sums of squares, row-major: little-endian f64 triples for a film with f64
+//! sums (`sums=float`), little-endian i128 triples (units of 2⁻⁶⁴ and 2⁻⁴⁰, see
+//! [`scene::Summation::Fixed`]) for fixed-point sums (`sums=fixed`). Files are written to
+//! `FILE.tmp` and renamed over `FILE`, so a crash never leaves a truncated checkpoint.
 //!
 //! Version 3 added what the checkpoint rendered: `vcm_version` (the crate version of the
 //! binary that wrote it; a different version may render differently, so it must match),
 //! `scene_hash` and one `scene_read=HASH PATH` line per file the scene loader read
 //! ([`Fingerprint`]). Version 2 files (no scene record) are refused with a message: resume
-//! them with the binary that wrote them.
+//! them with the binary that wrote them. Version 4 added `sums`, `first_iteration`, `largest`
+//! (fixed-point films) and, for a slice of a render ([`crate::slice`]), `slice=K/N` and
+//! `slice_iterations`; version 3 files are read as f64 films from iteration 0.
 
 use render::path_tracer::{Heuristic, RussianRoulette};
 use std::collections::BTreeMap;
@@ -20,9 +23,10 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use scene::Film;
+use scene::{Film, FilmSums, Summation};
 
 use crate::fingerprint::Fingerprint;
+use crate::slice::Slice;
 
 /// The settings a checkpoint records (as the command line spells them).
 #[derive(Clone, Debug, PartialEq)]
@@ -57,11 +61,17 @@ pub struct Recorded {
     pub film: String,
     /// What the scene was built from.
     pub fingerprint: Fingerprint,
+    /// How the film adds iterations (absent in version 3: f64).
+    pub sums: Summation,
+    /// The slice of the render this checkpoint holds (`None`: the whole render).
+    pub slice: Option<Slice>,
 }
 
 /// The checkpoint format this binary reads and writes.
-pub const FORMAT: u32 = 3;
-const MAGIC: &str = "vcm-checkpoint 3";
+pub const FORMAT: u32 = 4;
+const MAGIC: &str = "vcm-checkpoint 4";
+/// The previous format, still read (f64 films from iteration 0).
+const MAGIC_3: &str = "vcm-checkpoint 3";
 /// The renderer version recorded in (and required of) checkpoints.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
@@ -70,41 +80,37 @@ pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
     if !film.has_variance() {
         bail!("internal error: a checkpoint needs a film that keeps its sums of squares");
     }
+    if film.summation() != recorded.sums {
+        bail!(
+            "internal error: the film's sums are {}, the checkpoint records {}",
+            film.summation().name(),
+            recorded.sums.name()
+        );
+    }
     let temporary = PathBuf::from(format!("{}.tmp", path.display()));
     let write = || -> std::io::Result<()> {
         let mut out = std::io::BufWriter::new(std::fs::File::create(&temporary)?);
         writeln!(out, "{MAGIC}")?;
-        let r = recorded;
-        writeln!(out, "vcm_version={VERSION}")?;
-        writeln!(out, "scene_hash={:016x}", r.fingerprint.hash)?;
-        for (file, hash) in &r.fingerprint.files {
-            writeln!(out, "scene_read={hash:016x} {}", file.display())?;
+        for line in header_lines(recorded) {
+            writeln!(out, "{line}")?;
         }
-        writeln!(out, "mask={}", r.mask)?;
-        if let Some((file, defines)) = &r.scene_file {
-            writeln!(out, "scene_file={}", file.display())?;
-            for define in defines {
-                writeln!(out, "define={define}")?;
-            }
-        }
-        writeln!(out, "algorithm={}", r.algorithm)?;
-        writeln!(out, "resolution={}x{}", r.resolution.0, r.resolution.1)?;
-        writeln!(out, "max_length={}", r.max_length)?;
-        writeln!(out, "seed={}", r.seed)?;
-        writeln!(out, "radius_factor={}", r.radius_factor)?;
-        writeln!(out, "radius_alpha={}", r.radius_alpha)?;
-        writeln!(out, "radius_mode={}", r.radius_mode)?;
-        writeln!(out, "memory_efficient={}", r.memory_efficient)?;
-        writeln!(out, "spectral={}", r.spectral)?;
-        writeln!(out, "russian_roulette={}", r.russian_roulette.name())?;
-        writeln!(out, "heuristic={}", r.heuristic.name())?;
-        writeln!(out, "film={}", r.film)?;
         writeln!(out, "iterations={}", film.iterations())?;
+        writeln!(out, "first_iteration={}", film.first_iteration())?;
         writeln!(out, "rejected={}", film.rejected_samples())?;
+        if let FilmSums::Fixed { largest, .. } = film.raw_sums() {
+            writeln!(out, "largest={largest}")?;
+        }
         writeln!(out)?;
-        for pixel in film.sums().iter().chain(film.sum_squares()) {
-            for value in pixel {
-                out.write_all(&value.to_le_bytes())?;
+        match film.raw_sums() {
+            FilmSums::Float { sums, squares } => {
+                for value in sums.iter().chain(squares).flatten() {
+                    out.write_all(&value.to_le_bytes())?;
+                }
+            }
+            FilmSums::Fixed { sums, squares, .. } => {
+                for value in sums.iter().chain(squares).flatten() {
+                    out.write_all(&value.to_le_bytes())?;
+                }
             }
         }
         out.into_inner().map_err(|e| e.into_error())?.sync_all()
@@ -112,6 +118,40 @@ pub fn save(path: &Path, recorded: &Recorded, film: &Film) -> Result<()> {
     write().with_context(|| format!("cannot write checkpoint '{}'", temporary.display()))?;
     std::fs::rename(&temporary, path)
         .with_context(|| format!("cannot move checkpoint '{}' to '{}'", temporary.display(), path.display()))
+}
+
+/// The settings lines of a checkpoint header (`key=value`, in file order, without the film's
+/// counts): what must be equal for two checkpoints to be parts of one render.
+pub fn header_lines(r: &Recorded) -> Vec<String> {
+    let mut lines = vec![format!("vcm_version={VERSION}"), format!("scene_hash={:016x}", r.fingerprint.hash)];
+    for (file, hash) in &r.fingerprint.files {
+        lines.push(format!("scene_read={hash:016x} {}", file.display()));
+    }
+    lines.push(format!("mask={}", r.mask));
+    if let Some((file, defines)) = &r.scene_file {
+        lines.push(format!("scene_file={}", file.display()));
+        for define in defines {
+            lines.push(format!("define={define}"));
+        }
+    }
+    lines.push(format!("algorithm={}", r.algorithm));
+    lines.push(format!("resolution={}x{}", r.resolution.0, r.resolution.1));
+    lines.push(format!("max_length={}", r.max_length));
+    lines.push(format!("seed={}", r.seed));
+    lines.push(format!("radius_factor={}", r.radius_factor));
+    lines.push(format!("radius_alpha={}", r.radius_alpha));
+    lines.push(format!("radius_mode={}", r.radius_mode));
+    lines.push(format!("memory_efficient={}", r.memory_efficient));
+    lines.push(format!("spectral={}", r.spectral));
+    lines.push(format!("russian_roulette={}", r.russian_roulette.name()));
+    lines.push(format!("heuristic={}", r.heuristic.name()));
+    lines.push(format!("film={}", r.film));
+    lines.push(format!("sums={}", r.sums.name()));
+    if let Some(slice) = &r.slice {
+        lines.push(format!("slice={}", slice.name()));
+        lines.push(format!("slice_iterations={}", slice.iterations));
+    }
+    lines
 }
 
 /// Reads a checkpoint: its settings and its film.
@@ -122,7 +162,7 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
     let header = std::str::from_utf8(&bytes[..split]).map_err(|_| bad("the header is not text".into()))?;
     let mut lines = header.lines();
     match lines.next() {
-        Some(MAGIC) => {}
+        Some(MAGIC | MAGIC_3) => {}
         Some(old @ ("vcm-checkpoint 1" | "vcm-checkpoint 2")) => bail!(
             "checkpoint '{}' has format {} ('{old}'), which does not record the scene it rendered; this is vcm \
              {VERSION}, which reads format {FORMAT}: resume it with the vcm that wrote it, or start a new render",
@@ -193,23 +233,59 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
         },
         film: fields.get("film").map_or_else(|| "fis".to_string(), |f| f.to_string()),
         fingerprint: Fingerprint { hash: scene_hash, files },
+        sums: match fields.get("sums") {
+            None => Summation::Float,
+            Some(name) => Summation::from_name(name).ok_or_else(|| missing("sums"))?,
+        },
+        slice: match fields.get("slice") {
+            None => None,
+            Some(text) => {
+                let (index, count) = text
+                    .split_once('/')
+                    .and_then(|(k, n)| Some((k.parse::<u32>().ok()?, n.parse::<u32>().ok()?)))
+                    .filter(|(k, n)| k < n)
+                    .ok_or_else(|| missing("slice"))?;
+                let iterations = field(&fields, "slice_iterations").ok_or_else(|| missing("slice_iterations"))?;
+                Some(Slice { index, count, iterations })
+            }
+        },
     };
     let iterations: u64 = field(&fields, "iterations").ok_or_else(|| missing("iterations"))?;
     let rejected: u64 = field(&fields, "rejected").ok_or_else(|| missing("rejected"))?;
+    let first_iteration: u64 = match fields.get("first_iteration") {
+        None => 0,
+        Some(_) => field(&fields, "first_iteration").ok_or_else(|| missing("first_iteration"))?,
+    };
     let data = &bytes[split + 2..];
     let (w, h) = recorded.resolution;
     let pixels = w as usize * h as usize;
-    let expected = pixels * 48;
+    let value_bytes = match recorded.sums {
+        Summation::Float => 8,
+        Summation::Fixed => 16,
+    };
+    let expected = pixels * 6 * value_bytes;
     if data.len() != expected {
         bail!(bad(format!("expected {expected} bytes of film for {w}x{h}, found {}", data.len())));
     }
-    let mut triples = data.chunks_exact(24).map(|c| {
-        let v = |i: usize| f64::from_le_bytes(c[i * 8..i * 8 + 8].try_into().expect("8 bytes"));
-        [v(0), v(1), v(2)]
-    });
-    let sums = triples.by_ref().take(pixels).collect();
-    let squares = triples.collect();
-    let film = Film::from_sums(w, h, sums, squares, iterations, rejected).ok_or_else(|| bad("film size".into()))?;
+    let sums = match recorded.sums {
+        Summation::Float => {
+            let mut triples = data
+                .chunks_exact(24)
+                .map(|c| std::array::from_fn(|i| f64::from_le_bytes(c[i * 8..i * 8 + 8].try_into().expect("8 bytes"))));
+            let sums = triples.by_ref().take(pixels).collect();
+            FilmSums::Float { sums, squares: triples.collect() }
+        }
+        Summation::Fixed => {
+            let mut triples = data.chunks_exact(48).map(|c| {
+                std::array::from_fn(|i| i128::from_le_bytes(c[i * 16..i * 16 + 16].try_into().expect("16 bytes")))
+            });
+            let sums = triples.by_ref().take(pixels).collect();
+            let largest = field(&fields, "largest").ok_or_else(|| missing("largest"))?;
+            FilmSums::Fixed { sums, squares: triples.collect(), largest }
+        }
+    };
+    let film =
+        Film::from_raw(w, h, sums, first_iteration, iterations, rejected).ok_or_else(|| bad("film size".into()))?;
     Ok((recorded, film))
 }
 
@@ -238,6 +314,8 @@ mod tests {
             heuristic: Heuristic::Power,
             film: "splat".into(),
             fingerprint: Fingerprint::builtin(450, (3, 2)),
+            sums: Summation::Float,
+            slice: None,
         };
         let sums: Vec<[f64; 3]> = (0..6).map(|i| [i as f64 * 0.1, 1.0 / 3.0, f64::MIN_POSITIVE]).collect();
         let squares: Vec<[f64; 3]> = (0..6).map(|i| [i as f64, 0.5, 1e300]).collect();
@@ -271,7 +349,61 @@ mod tests {
         assert!(message.contains("written by vcm 0.0.1-other") && message.contains(VERSION), "{message}");
         std::fs::write(&path, b"vcm-checkpoint 2\nmask=1\n\n").unwrap();
         let message = load(&path).unwrap_err().to_string();
-        assert!(message.contains("has format 2") && message.contains("reads format 3"), "{message}");
+        assert!(message.contains("has format 2") && message.contains("reads format 4"), "{message}");
+        // Format 3 (no sums, first iteration or slice lines) is read as an f64 film from 0.
+        recorded.scene_file = None;
+        recorded.fingerprint = Fingerprint::builtin(450, (3, 2));
+        save(&path, &recorded, &film).unwrap();
+        let text = std::fs::read(&path).unwrap();
+        let header_end = text.windows(2).position(|w| w == b"\n\n").unwrap();
+        let header = String::from_utf8_lossy(&text[..header_end])
+            .replace("vcm-checkpoint 4", "vcm-checkpoint 3")
+            .replace("\nsums=float", "")
+            .replace("\nfirst_iteration=0", "");
+        std::fs::write(&path, [header.as_bytes(), &text[header_end..]].concat()).unwrap();
+        let (back, film_back) = load(&path).unwrap();
+        assert_eq!((back, film_back.sums().to_vec(), film_back.first_iteration()), (recorded, sums, 0));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn fixed_point_slices_round_trip_exactly() {
+        let dir = std::env::temp_dir().join(format!("vcm-checkpoint-fixed-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("part-1.ckpt");
+        let slice = Slice { index: 1, count: 3, iterations: 10 };
+        let recorded = Recorded {
+            mask: 1,
+            scene_file: None,
+            algorithm: "pt".into(),
+            resolution: (2, 1),
+            max_length: 5,
+            seed: 3,
+            radius_factor: 0.003,
+            radius_alpha: 0.75,
+            radius_mode: "global".into(),
+            memory_efficient: false,
+            spectral: false,
+            russian_roulette: RussianRoulette::Albedo,
+            heuristic: Heuristic::Balance,
+            film: "fis".into(),
+            fingerprint: Fingerprint::builtin(1, (2, 1)),
+            sums: Summation::Fixed,
+            slice: Some(slice),
+        };
+        let mut film = Film::with_summation(2, 1, true, Summation::Fixed).starting_at(slice.range().start);
+        let pixels = vec![spectrum::Rgb::new(1e-9, 0.3, 7e8), spectrum::Rgb::new(-2.5, 1.0 / 3.0, 0.0)];
+        for _ in slice.range() {
+            film.add_iteration(&scene::FrameBuffer { width: 2, height: 1, pixels: pixels.clone() }, 1);
+        }
+        save(&path, &recorded, &film).unwrap();
+        let (back, film_back) = load(&path).unwrap();
+        assert_eq!(back, recorded);
+        assert_eq!(film_back.raw_sums(), film.raw_sums());
+        assert_eq!((film_back.first_iteration(), film_back.iterations(), film_back.rejected_samples()), (3, 3, 3));
+        // A film in the other mode than the record is refused.
+        let float = Film::new(2, 1);
+        assert!(save(&path, &recorded, &float).unwrap_err().to_string().contains("internal error"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

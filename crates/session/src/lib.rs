@@ -19,10 +19,12 @@ pub mod checkpoint;
 pub mod fingerprint;
 pub mod guard;
 mod live;
+pub mod merge;
 pub mod outputs;
 mod prepare;
 mod request;
 mod run;
+pub mod slice;
 pub mod source;
 mod summary;
 

@@ -10,7 +10,7 @@ use render::driver::Budget;
 use render::vcm::technique_images::TechniqueLayout;
 use render::{Algorithm, RenderSettings};
 use scene::filter::FilmMode;
-use scene::{Film, Scene};
+use scene::{Film, Scene, Summation};
 
 use crate::Notice;
 use crate::checkpoint::{self, Recorded};
@@ -18,6 +18,7 @@ use crate::guard::{self, Guard};
 use crate::outputs::{check_writable, output_paths};
 use crate::request::{Request, radius_mode_from_name, radius_mode_name};
 use crate::run::{DEFAULT_ITERATIONS, Observer, validate};
+use crate::slice::SliceSpec;
 use crate::source::{LoadedScene, SceneSource, load_scene, scene_source};
 
 /// A render session ready for its first iteration.
@@ -81,6 +82,32 @@ impl Prepared {
                     );
                 }
                 request.film = Some(mode);
+                if let Some(asked) = request.summation.filter(|asked| *asked != recorded.sums) {
+                    bail!(
+                        "cannot resume '{}' with --sums {}: it was rendered with --sums {}",
+                        path.display(),
+                        asked.name(),
+                        recorded.sums.name()
+                    );
+                }
+                request.summation = Some(recorded.sums);
+                if let Some(slice) = recorded.slice {
+                    let asked = request.slice.map(|s| (s.index, s.count));
+                    if asked.is_some_and(|asked| asked != (slice.index, slice.count)) {
+                        bail!("cannot resume '{}' as another slice: it holds slice {}", path.display(), slice.name());
+                    }
+                    if request.budget.is_some_and(|b| b != Budget::Iterations(slice.iterations)) {
+                        bail!(
+                            "cannot resume slice '{}' with another budget: its render has {} iterations",
+                            path.display(),
+                            slice.iterations
+                        );
+                    }
+                    request.slice = Some(SliceSpec { index: slice.index, count: slice.count });
+                    request.budget = Some(Budget::Iterations(slice.iterations));
+                } else if request.slice.is_some() {
+                    bail!("cannot resume '{}' as a slice: it holds a whole render", path.display());
+                }
                 if request.checkpoint.is_none() {
                     request.checkpoint = Some(path.clone());
                 }
@@ -88,6 +115,24 @@ impl Prepared {
             }
             None => None,
         };
+        if let Some(spec) = request.slice {
+            let name = format!("{}/{}", spec.index, spec.count);
+            if request.summation == Some(Summation::Float) {
+                bail!("--slice {name} needs --sums fixed (slices are merged exactly), not --sums float");
+            }
+            request.summation = Some(Summation::Fixed);
+            if matches!(request.budget, Some(Budget::Time(_))) {
+                bail!(
+                    "--slice {name} needs an iteration count (--iterations), not --time: every slice must know its iterations"
+                );
+            }
+            if request.checkpoint.is_none() {
+                bail!("--slice {name} needs --checkpoint FILE: the slice's film is what `vcm merge` reads");
+            }
+            if request.techniques.is_some() {
+                bail!("--slice cannot be combined with --techniques (technique images are not merged)");
+            }
+        }
         let r = &request;
         validate(r, resumed.is_some())?;
         let outputs = match &r.output {
@@ -154,7 +199,26 @@ impl Prepared {
             // Checkpoints always carry the sums of squares, so that any resume can ask for a
             // variance image.
             variance: r.keep_variance || r.variance.is_some() || r.checkpoint.is_some(),
+            summation: r.summation.unwrap_or_default(),
             ..RenderSettings::default()
+        };
+        let slice = match r.slice {
+            Some(spec) => {
+                let Budget::Iterations(n) = settings.budget else { unreachable!("checked above") };
+                let slice = spec.of(n)?;
+                // The slice ends where its range does; an unfinished slice resumes in place.
+                settings.budget = Budget::Iterations(slice.range().end);
+                Some(slice)
+            }
+            None => None,
+        };
+        let resumed = match (resumed, slice) {
+            (None, Some(slice)) => {
+                let film = Film::with_summation(scene.camera.width, scene.camera.height, true, settings.summation)
+                    .starting_at(slice.range().start);
+                Some((film, None))
+            }
+            (resumed, _) => resumed.map(|(film, _, path)| (film, Some(path))),
         };
         if let Some(vcm_settings) = settings.vcm_settings()
             && !settings.memory_efficient
@@ -185,11 +249,13 @@ impl Prepared {
             heuristic: r.heuristic,
             film: scene.camera.film.name().to_string(),
             fingerprint,
+            sums: settings.summation,
+            slice,
         };
 
         Ok(Self {
-            resumed_iterations: resumed.as_ref().map(|(film, ..)| film.iterations()),
-            resumed: resumed.map(|(film, ..)| film),
+            resumed_iterations: resumed.as_ref().filter(|(_, path)| path.is_some()).map(|(film, _)| film.iterations()),
+            resumed: resumed.map(|(film, _)| film),
             record_families: request.techniques.is_some(),
             request,
             scene,

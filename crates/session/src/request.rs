@@ -1,6 +1,7 @@
 //! What a front end asks a session for.
 
 use render::path_tracer::{Heuristic, RussianRoulette};
+use scene::Summation;
 use scene::filter::FilmMode;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -9,6 +10,7 @@ use render::driver::Budget;
 use render::vcm::RadiusMode;
 use render::{Algorithm, RenderSettings};
 
+use crate::slice::SliceSpec;
 use crate::source::SceneSource;
 
 /// Everything a render session needs. [`Request::new`] gives the command line's defaults.
@@ -80,6 +82,12 @@ pub struct Request {
     /// built-in scenes. A resumed render keeps its checkpoint's mode (asking for another one is
     /// an error).
     pub film: Option<FilmMode>,
+    /// How the film adds iterations (`--sums`). `None`: f64 sums, or fixed-point sums for a
+    /// slice (which needs them). A resumed render keeps its checkpoint's.
+    pub summation: Option<Summation>,
+    /// Render only this slice of the iterations into the checkpoint (`--slice K/N`), for
+    /// `vcm merge` ([`crate::slice`]). A resumed slice keeps its checkpoint's.
+    pub slice: Option<SliceSpec>,
 }
 
 impl Request {
@@ -116,6 +124,8 @@ impl Request {
             russian_roulette: defaults.russian_roulette,
             heuristic: defaults.heuristic,
             film: None,
+            summation: None,
+            slice: None,
         }
     }
 }

@@ -12,7 +12,6 @@ use crate::outputs::{write_st_images, write_technique_images};
 use crate::prepare::Prepared;
 use crate::request::Request;
 use crate::{Notice, Summary};
-use render::RenderSettings;
 use render::distributed::{Collective, agree, run_distributed};
 use render::progressive::Progressive;
 
@@ -91,7 +90,7 @@ pub fn render_on(
     };
     let result = progressive.into_output(interrupted);
     if !root {
-        let summary = summary(&scene.name, &r, &settings, &result, resumed_iterations, Vec::new(), ranks);
+        let summary = summary(&scene.name, &r, &result, resumed_iterations, Vec::new(), ranks, recorded.slice);
         return Ok(Outcome { output: result, summary });
     }
 
@@ -121,7 +120,7 @@ pub fn render_on(
     if let Some(path) = &r.checkpoint {
         written.push(format!("checkpoint {}", path.display()));
     }
-    let summary = summary(&scene.name, &r, &settings, &result, resumed_iterations, written, ranks);
+    let summary = summary(&scene.name, &r, &result, resumed_iterations, written, ranks, recorded.slice);
     Ok(Outcome { output: result, summary })
 }
 
@@ -129,17 +128,17 @@ pub fn render_on(
 fn summary(
     scene: &str,
     r: &Request,
-    settings: &RenderSettings,
     result: &RenderOutput,
     resumed_iterations: Option<u64>,
     written: Vec<String>,
     ranks: Option<&dyn Collective>,
+    slice: Option<crate::slice::Slice>,
 ) -> Summary {
     let film = &result.film;
     Summary {
         scene: scene.to_string(),
         algorithm: r.algorithm.name(),
-        spectral: settings.spectral,
+        spectral: r.spectral,
         resolution: (film.width(), film.height()),
         iterations: film.iterations(),
         resumed_after: resumed_iterations,
@@ -156,6 +155,7 @@ fn summary(
         },
         interrupted: result.interrupted,
         written,
+        slice,
     }
 }
 

@@ -34,6 +34,8 @@ pub struct Summary {
     pub interrupted: bool,
     /// The files written, as the summary names them.
     pub written: Vec<String>,
+    /// The slice of the render this session rendered (`--slice`).
+    pub slice: Option<crate::slice::Slice>,
 }
 
 impl fmt::Display for Summary {
@@ -52,6 +54,13 @@ impl fmt::Display for Summary {
             Some(n) => format!(" x {n} ranks"),
             None => String::new(),
         };
+        let slice = match &self.slice {
+            Some(slice) => {
+                let range = slice.range();
+                format!(" of slice {} ({}..{} of {})", slice.name(), range.start, range.end, slice.iterations)
+            }
+            None => String::new(),
+        };
         let rejected = if self.rejected_by_family.is_empty() {
             String::new()
         } else {
@@ -60,7 +69,7 @@ impl fmt::Display for Summary {
         };
         write!(
             f,
-            "{}{} with {}{} at {}x{}: {} iterations{resumed} in {:.2} s ({:.1} ms/iteration, {} threads{ranks}{vertices}), {} rejected samples{rejected} -> {}",
+            "{}{} with {}{} at {}x{}: {} iterations{slice}{resumed} in {:.2} s ({:.1} ms/iteration, {} threads{ranks}{vertices}), {} rejected samples{rejected} -> {}",
             if self.interrupted { "interrupted: " } else { "" },
             self.scene,
             self.algorithm,

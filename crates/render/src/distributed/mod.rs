@@ -96,7 +96,7 @@ pub fn run_distributed(
     let root = rank == 0;
     let start = Instant::now();
     let mut last_checkpoint = Instant::now();
-    let first = comm.broadcast(progressive.iterations().to_le_bytes().to_vec())?;
+    let first = comm.broadcast(progressive.next_iteration().to_le_bytes().to_vec())?;
     let mut base = u64::from_le_bytes(
         first.as_slice().try_into().map_err(|_| format!("rank 0 sent a first iteration of {} bytes", first.len()))?,
     );
@@ -116,9 +116,9 @@ pub fn run_distributed(
             let mut decision = match gather(progressive, comm, message) {
                 Ok(true) => Decision::Stop(true),
                 Ok(false) => match settings.budget {
-                    Budget::Iterations(n) if progressive.iterations() >= n => Decision::Stop(false),
+                    Budget::Iterations(n) if progressive.next_iteration() >= n => Decision::Stop(false),
                     Budget::Time(limit) if start.elapsed() >= limit => Decision::Stop(false),
-                    _ => Decision::Continue(progressive.iterations()),
+                    _ => Decision::Continue(progressive.next_iteration()),
                 },
                 Err(error) => Decision::Failed(error),
             };
