@@ -590,6 +590,58 @@ fn imagemap_orientation_scale_and_errors() {
 // ----- lights ------------------------------------------------------------------------------
 
 #[test]
+fn projection_light_follows_pbrt_v4() {
+    let dir = scratch_dir("projection");
+    // A wide 4×2 image: red 1 + column + 4·row (row 0 at the top).
+    let image = io::Image::from_fn(4, 2, |x, y| [(1 + x + 4 * y) as f32, 0.5, 0.0]);
+    io::write_image(&dir.join("proj.pfm"), &image, &io::WriteOptions::default()).unwrap();
+    let scene = |extra: &str| {
+        fs::write(
+            dir.join("scene.pbrt"),
+            format!(
+                "{HEADER}AttributeBegin\nTranslate 0 1 0\nRotate 90 0 1 0\n\
+                 LightSource \"projection\" \"string filename\" \"proj.pfm\" {extra}\nAttributeEnd\n"
+            ),
+        )
+        .unwrap();
+        io::pbrt::load(&dir.join("scene.pbrt"))
+    };
+    let d = scene("\"float fov\" 60 \"float scale\" 2").unwrap();
+    let light = scene::Light::from_desc(&d.lights[0]).unwrap();
+    let sphere = scene::BoundingSphere { center: Vec3::ZERO, radius: 10.0 };
+    // Light space: +z is world +x (Rotate 90 about y), +y is world +y, +x is world −z. pbrt's
+    // screen window for a wide image is [−2, 2]×[−1, 1] times tan(30°) (fov on the short axis);
+    // the image's left column is light −x, its top row light +y.
+    let tan = 30f32.to_radians().tan();
+    for (column, row) in [(0, 0), (3, 0), (1, 1), (2, 1)] {
+        let sx = -2.0 + (column as f32 + 0.5) * 1.0;
+        let sy = -1.0 + (row as f32 + 0.5) * 1.0;
+        // Light-space direction through the texel centre (y flipped: row 0 is up).
+        let (lx, ly) = (sx * tan, -sy * tan);
+        let world = Vec3::new(1.0, ly, -lx).normalize();
+        let distance = 3.0;
+        let receiver = Vec3::new(0.0, 1.0, 0.0) + world * distance;
+        let sample = light.sample_direct(receiver, [0.5, 0.5], &sphere).unwrap();
+        let expected = 2.0 * (1 + column + 4 * row) as f32;
+        // I = scale·E (no cos³ falloff); the direct pdf carries the 1/d².
+        assert!((sample.radiance.r - expected).abs() < 1e-4 * expected, "texel ({column}, {row}): {sample:?}");
+        assert!((sample.radiance.g - 1.0).abs() < 1e-4 && (sample.direct_pdf.0 - distance * distance).abs() < 1e-3);
+    }
+    // Beyond the short axis' field of view: nothing.
+    let above = Vec3::new(0.0, 1.0, 0.0) + Vec3::new(1.0, 0.7, 0.0).normalize() * 3.0;
+    assert!(light.sample_direct(above, [0.5, 0.5], &sphere).is_none());
+    // "power": the flux Σ luminance·cos³θ·A / texels (pbrt's normalisation) becomes 10 W.
+    let d = scene("\"float fov\" 60 \"float power\" 10").unwrap();
+    let power = scene::Light::from_desc(&d.lights[0]).unwrap().power(&sphere);
+    assert!((power - 10.0).abs() < 1e-3 * 10.0, "power {power}");
+    let e = scene("\"float fov\" 190").unwrap_err().to_string();
+    assert!(e.contains("fov 190"), "{e}");
+    fs::write(dir.join("scene.pbrt"), format!("{HEADER}LightSource \"projection\"\n")).unwrap();
+    let e = io::pbrt::load(&dir.join("scene.pbrt")).unwrap_err().to_string();
+    assert!(e.contains("scene.pbrt:3:") && e.contains("\"filename\" is required"), "{e}");
+}
+
+#[test]
 fn point_spot_and_distant_lights() {
     let text = format!(
         "{HEADER}Translate 1 0 0\n\

@@ -177,6 +177,17 @@ pub struct ShapeDesc {
     pub alpha: Option<Texture>,
 }
 
+/// How a [`LightDesc::Projector`]'s image becomes intensity.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProjectorModel {
+    /// Mitsuba 3's `projector`: the image is the irradiance the image plane (at distance 1)
+    /// receives, divided by π: intensity `π·scale·E(u, v)/cos³θ` (W/sr).
+    Irradiance,
+    /// pbrt-v4's `projection` light: the image is the intensity itself, `scale·E(u, v)` (W/sr),
+    /// with no falloff across the image.
+    Intensity,
+}
+
 /// A light that is not attached to a shape.
 #[derive(Clone, Debug, PartialEq)]
 pub enum LightDesc {
@@ -209,9 +220,11 @@ pub enum LightDesc {
     /// same frame and field of view would see it. The image plane lies at distance 1 along
     /// `frame[2]`; a direction with local coordinates `(x, y, z)` (`z > 0`) looks up
     /// `u = ½ − ½·x/(z·t)`, `v = ½ − ½·a·y/(z·t)`, `t = tan(fov_x/2)`, `a` = `aspect`, and
-    /// carries the intensity `π·scale·E(u, v)/cos³θ` (W/sr), so that the image plane receives
-    /// the irradiance `π·scale·E` (Mitsuba 3's normalisation).
+    /// carries the intensity of `model`: `π·scale·E(u, v)/cos³θ` (W/sr), so that the image
+    /// plane receives the irradiance `π·scale·E` (Mitsuba 3), or `scale·E(u, v)` (pbrt-v4).
     Projector {
+        /// How the image becomes intensity.
+        model: ProjectorModel,
         /// Position of the pinhole.
         position: Vec3,
         /// World images of the local axes: `x` (the image's left), `y` (its up), `z` (the

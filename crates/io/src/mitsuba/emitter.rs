@@ -229,6 +229,7 @@ impl<'a> Loader<'a> {
             ex = ex.map(|v| -v);
         }
         Ok(LightDesc::Projector {
+            model: scene::desc::ProjectorModel::Irradiance,
             position: to_vec3(m.point([0.0; 3])),
             frame: [to_vec3(ex), to_vec3(ey), to_vec3(ez)],
             irradiance: Arc::new(irradiance),

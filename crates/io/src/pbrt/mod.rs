@@ -1445,6 +1445,62 @@ impl Builder {
 
     // ----- lights ---------------------------------------------------------------------------
 
+    /// pbrt-v4's `projection` light: the image (`filename`, looked up nearest-texel, row 0 at
+    /// the top) is the intensity `scale·E` (W/sr) over a pinhole frustum along the light's +z
+    /// whose shorter image axis spans `fov` degrees; the image's left is the light's −x and its
+    /// top the light's +y (pbrt flips y). `power` rescales so that the flux, Σ over texels of
+    /// luminance·cos³θ times the frustum's plane area over the texel count, is `power` watts.
+    fn projection_light(&self, file: &Path, d: &Directive, scale: f32) -> Result<LightDesc, SceneError> {
+        let p = &d.params;
+        let (filename, fpos) =
+            p.string("filename")?.ok_or_else(|| err(file, d.pos, "projection: \"filename\" is required"))?;
+        let fov = p.float("fov", 90.0)?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(err(file, d.pos, format!("projection: fov {fov} is not in (0, 180) degrees")));
+        }
+        let power = p.float_opt("power")?;
+        let image = light_image(&resolve(file, &filename), 1.0).map_err(|e| p.error(fpos, e))?;
+        let (width, height) = (image.width as usize, image.height as usize);
+        let aspect = width as f32 / height as f32;
+        let tan = (0.5 * fov.to_radians()).tan();
+        // The screen window is [-a, a]×[-1, 1] for a wide image and [-1, 1]×[-1/a, 1/a] otherwise.
+        let (bx, by) = if aspect > 1.0 { (aspect, 1.0) } else { (1.0, 1.0 / aspect) };
+        let mut scale = scale;
+        if let Some(power) = power.filter(|&power| power > 0.0) {
+            let area = 4.0 * tan * tan * bx * by;
+            let mut sum = 0.0f64;
+            for (i, texel) in image.pixels.iter().enumerate() {
+                let x = (2.0 * ((i % width) as f32 + 0.5) / width as f32 - 1.0) * bx * tan;
+                let y = (2.0 * ((i / width) as f32 + 0.5) / height as f32 - 1.0) * by * tan;
+                let cos3 = (1.0 + x * x + y * y).powf(-1.5);
+                sum += f64::from(texel.luminance() * cos3);
+            }
+            let flux = f64::from(area) * sum / (width * height) as f64;
+            if flux <= 0.0 {
+                return Err(p.error(fpos, "projection: a black image cannot have a power"));
+            }
+            scale *= (f64::from(power) / flux) as f32;
+        }
+        let ctm = self.state.ctm;
+        if similarity_scale(&ctm).is_none() {
+            return Err(err(file, d.pos, "projection light under a non-uniform scale or shear"));
+        }
+        let axis =
+            |v: V3| normalize(ctm.vector(v)).map(f32v).ok_or_else(|| err(file, d.pos, "singular transformation"));
+        let (x, y, z) = (axis([1.0, 0.0, 0.0])?, axis([0.0, 1.0, 0.0])?, axis([0.0, 0.0, 1.0])?);
+        let fov_x_degrees = 2.0 * (bx * tan).atan().to_degrees();
+        let sampling = Sampling { wrap: WrapMode::Clamp, filter: FilterMode::Nearest };
+        Ok(LightDesc::Projector {
+            model: scene::desc::ProjectorModel::Intensity,
+            position: f32v(ctm.point([0.0; 3])),
+            frame: [-x, y, z],
+            irradiance: Arc::new(Texture::bitmap(image, UvTransform::IDENTITY, sampling)),
+            scale,
+            fov_x_degrees,
+            aspect,
+        })
+    }
+
     fn area_light_directive(&mut self, file: &Path, d: &Directive) -> Result<(), SceneError> {
         if d.str_arg(0) != "diffuse" {
             return Err(err(
@@ -1602,7 +1658,8 @@ impl Builder {
                     }
                 }
             }
-            other @ ("goniometric" | "projection") => {
+            "projection" => self.projection_light(file, d, scale)?,
+            other @ "goniometric" => {
                 return Err(err(file, d.arg_pos[0], format!("light \"{other}\" is not supported")));
             }
             other => return Err(err(file, d.arg_pos[0], format!("unknown light type \"{other}\""))),
@@ -1656,14 +1713,20 @@ fn loop_subdivision_mesh(file: &Path, d: &Directive) -> Result<MeshData, SceneEr
 /// The radiance image of a `diffuse` area light (`filename`), times `scale`: 8-bit images
 /// sRGB-decoded, float images linear, looked up bilinearly at `(u, 1 − v)` (pbrt-v4's
 /// convention for images, as for `imagemap`) with clamped edges.
-fn area_light_image(path: &Path, scale: f32) -> Result<Texture, String> {
+/// An emitter's image file as linear texels times `scale` (8-bit files decoded from sRGB, as
+/// pbrt-v4 reads them); negative or non-finite values are errors.
+fn light_image(path: &Path, scale: f32) -> Result<Arc<TextureImage>, String> {
     let stored = crate::read_texture_file(path).map_err(|e| format!("cannot read image: {e}"))?;
     let image = stored.linear(crate::TextureEncoding::Srgb);
     if let Some(v) = image.pixels.iter().flatten().find(|v| !v.is_finite() || **v < 0.0) {
         return Err(format!("image '{}' has a negative or non-finite value {v}", path.display()));
     }
     let pixels = image.pixels.iter().map(|px| Rgb::from_array(px.map(|v| v * scale))).collect();
-    let image = Arc::new(TextureImage { width: image.width as u32, height: image.height as u32, pixels });
+    Ok(Arc::new(TextureImage { width: image.width as u32, height: image.height as u32, pixels }))
+}
+
+fn area_light_image(path: &Path, scale: f32) -> Result<Texture, String> {
+    let image = light_image(path, scale)?;
     let to_uv = UvTransform { columns: [Vec2::new(1.0, 0.0), Vec2::new(0.0, -1.0)], translation: Vec2::new(0.0, 1.0) };
     Ok(Texture::bitmap(image, to_uv, Sampling { wrap: WrapMode::Clamp, filter: FilterMode::Bilinear }))
 }

@@ -145,9 +145,17 @@ impl Light {
                     Some(t) => spot.with_texture(t.texture.clone(), t.x_axis, t.y_axis)?,
                 }))
             }
-            LightDesc::Projector { position, frame, irradiance, scale, fov_x_degrees, aspect } => Ok(Light::Projector(
-                ProjectorLight::new(*position, *frame, irradiance.clone(), *scale, *fov_x_degrees, *aspect)?,
-            )),
+            LightDesc::Projector { model, position, frame, irradiance, scale, fov_x_degrees, aspect } => {
+                Ok(Light::Projector(ProjectorLight::with_model(
+                    *model,
+                    *position,
+                    *frame,
+                    irradiance.clone(),
+                    *scale,
+                    *fov_x_degrees,
+                    *aspect,
+                )?))
+            }
             LightDesc::Directional { direction, irradiance } => {
                 let direction = check_direction("directional light direction", *direction)?;
                 check_rgb("directional light irradiance", *irradiance)?;

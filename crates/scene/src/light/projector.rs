@@ -7,13 +7,14 @@
 //! `u = ½ − ½·(x/z)/t`, `v = ½ − ½·a·(y/z)/t` (`t = tan(fov_x/2)`, `a` = width/height), so the
 //! plane spans `A = 4t²/a` square units and `dω = cos³θ · A · du dv`.
 //!
-//! Emission: intensity `I(ω) = π·scale·E(u, v)/cos³θ` (W/sr), which puts the irradiance
-//! `π·scale·E` on the image plane (Mitsuba 3's normalisation); flux `π·scale·A·∫E du dv`.
+//! Emission ([`ProjectorModel`]): Mitsuba 3's intensity `I(ω) = π·scale·E(u, v)/cos³θ` (W/sr),
+//! which puts the irradiance `π·scale·E` on the image plane, flux `π·scale·A·∫E du dv`; or
+//! pbrt-v4's `I(ω) = scale·E(u, v)`, flux `scale·A·∫E·cos³θ du dv`.
 //!
 //! Sampling: emission picks `(u, v)` from a piecewise-constant density `p(u, v)` over the
-//! image that follows the luminance of `E` ([`super::tabulated`]); the direction then has the
-//! solid-angle density `p/(A·cos³θ)`. The position is a delta (area density 1, as for point
-//! lights).
+//! image that follows the flux per unit image area (the luminance of `E`, times cos³θ for
+//! pbrt's model) ([`super::tabulated`]); the direction then has the solid-angle density
+//! `p/(A·cos³θ)`. The position is a delta (area density 1, as for point lights).
 
 use std::sync::Arc;
 
@@ -21,6 +22,7 @@ use math::{Distribution2D, Frame, PI, PdfA, PdfW, Vec2, Vec3};
 use spectrum::Rgb;
 
 use super::{DirectSample, EmissionSample, check_point, tabulated};
+use crate::desc::ProjectorModel;
 use crate::texture::Texture;
 
 /// Largest tabulation grid of the sampling density (cells per axis).
@@ -36,7 +38,9 @@ pub struct ProjectorLight {
     /// Local frame: `x` towards the image's left, `y` up, `z` the optical axis.
     frame: Frame,
     irradiance: Arc<Texture>,
-    /// `π·scale`.
+    /// How the image becomes intensity.
+    model: ProjectorModel,
+    /// `π·scale` (Mitsuba's model) or `scale` (pbrt's).
     factor: f32,
     /// `tan(fov_x/2)`.
     tan_half_fov: f32,
@@ -52,8 +56,22 @@ pub struct ProjectorLight {
 impl ProjectorLight {
     /// A projector at `position` with local axes `frame` (`[x, y, z]`, orthonormal within
     /// 1e-3), projecting `irradiance` times `scale` over a full horizontal field of view of
-    /// `fov_x_degrees` ∈ (0°, 180°) and an image aspect (width/height) `aspect` > 0.
+    /// `fov_x_degrees` ∈ (0°, 180°) and an image aspect (width/height) `aspect` > 0, in
+    /// Mitsuba 3's model ([`ProjectorModel::Irradiance`]).
     pub fn new(
+        position: Vec3,
+        frame: [Vec3; 3],
+        irradiance: Arc<Texture>,
+        scale: f32,
+        fov_x_degrees: f32,
+        aspect: f32,
+    ) -> Result<Self, String> {
+        Self::with_model(ProjectorModel::Irradiance, position, frame, irradiance, scale, fov_x_degrees, aspect)
+    }
+
+    /// [`ProjectorLight::new`] in the given model.
+    pub fn with_model(
+        model: ProjectorModel,
         position: Vec3,
         frame: [Vec3; 3],
         irradiance: Arc<Texture>,
@@ -85,17 +103,30 @@ impl ProjectorLight {
             .resolution()
             .map(|(w, h)| (w.min(MAX_CELLS), h.min(MAX_CELLS)))
             .unwrap_or(if irradiance.as_constant().is_some() { (1, 1) } else { (DEFAULT_CELLS, DEFAULT_CELLS) });
-        let luminance = |uv: Vec2| irradiance.eval(uv).luminance();
+        // cos³θ of the direction through the image point (u, v).
+        let cos3 = |uv: Vec2| {
+            let x = (1.0 - 2.0 * uv.x) * tan_half_fov;
+            let y = (1.0 - 2.0 * uv.y) * tan_half_fov / aspect;
+            (1.0 + x * x + y * y).powf(-1.5)
+        };
+        let luminance = |uv: Vec2| match model {
+            ProjectorModel::Irradiance => irradiance.eval(uv).luminance(),
+            ProjectorModel::Intensity => irradiance.eval(uv).luminance() * cos3(uv),
+        };
         let (distribution, mean) = match tabulated::tabulate(w as usize, h as usize, luminance) {
             Some(found) => found,
             // A black image: uniform sampling keeps the densities valid; nothing is emitted.
             None => (Distribution2D::new(&[1.0], 1, 1).ok_or("projector: no sampling distribution")?, 0.0),
         };
-        let factor = PI * scale;
+        let factor = match model {
+            ProjectorModel::Irradiance => PI * scale,
+            ProjectorModel::Intensity => scale,
+        };
         Ok(Self {
             position,
             frame: Frame { x: frame[0], y: frame[1], z: frame[2] },
             irradiance,
+            model,
             factor,
             tan_half_fov,
             aspect,
@@ -126,7 +157,10 @@ impl ProjectorLight {
     fn emitted(&self, local: Vec3) -> Option<(Rgb, f32)> {
         let uv = self.uv_of(local)?;
         let cos3 = local.z * local.z * local.z;
-        let intensity = self.irradiance.eval(uv) * (self.factor / cos3);
+        let intensity = match self.model {
+            ProjectorModel::Irradiance => self.irradiance.eval(uv) * (self.factor / cos3),
+            ProjectorModel::Intensity => self.irradiance.eval(uv) * self.factor,
+        };
         let pdf = self.distribution.pdf(uv) / (self.plane_area * cos3);
         Some((intensity, pdf))
     }
