@@ -140,7 +140,8 @@ fn textured_triangle_queries_agree_and_look_up_the_hit_uv() {
 fn projector() -> ProjectorLight {
     // Looking down −y, image left = +x… any orthonormal frame works.
     let frame = [Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, -1.0, 0.0)];
-    ProjectorLight::new(Vec3::new(0.0, 2.0, 0.0), frame, image(), 1.5, 70.0, 4.0 / 3.0).unwrap()
+    ProjectorLight::new(ProjectorModel::Irradiance, Vec3::new(0.0, 2.0, 0.0), frame, image(), 1.5, 70.0, 4.0 / 3.0)
+        .unwrap()
 }
 
 #[test]
@@ -204,7 +205,7 @@ fn projector_flux_is_pi_scale_area_times_the_mean_irradiance() {
     // A constant image: flux π·scale·A·E exactly, A = 4·tan²(fov/2)/aspect.
     let frame = [Vec3::X, Vec3::Y, Vec3::Z];
     let constant = Arc::new(Texture::Constant(Rgb::splat(0.8)));
-    let light = ProjectorLight::new(Vec3::ZERO, frame, constant, 2.0, 90.0, 2.0).unwrap();
+    let light = ProjectorLight::new(ProjectorModel::Irradiance, Vec3::ZERO, frame, constant, 2.0, 90.0, 2.0).unwrap();
     let l = Light::Projector(light);
     let expected = PI as f64 * 2.0 * (4.0 / 2.0) * 0.8;
     let mut rng = Rng::for_stream(9, 0, 0);
@@ -236,16 +237,9 @@ fn projector_flux_is_pi_scale_area_times_the_mean_irradiance() {
 fn pbrt_projector_has_constant_intensity_per_texel_and_samples_its_flux() {
     // pbrt-v4's model: I = scale·E(u, v), no 1/cos³θ; the sampler follows E·cos³θ.
     let frame = [Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, -1.0, 0.0)];
-    let light = ProjectorLight::with_model(
-        ProjectorModel::Intensity,
-        Vec3::new(0.0, 2.0, 0.0),
-        frame,
-        image(),
-        1.5,
-        70.0,
-        4.0 / 3.0,
-    )
-    .unwrap();
+    let light =
+        ProjectorLight::new(ProjectorModel::Intensity, Vec3::new(0.0, 2.0, 0.0), frame, image(), 1.5, 70.0, 4.0 / 3.0)
+            .unwrap();
     let l = Light::Projector(light.clone());
     let s = sphere();
     let tan = (35f32).to_radians().tan();
@@ -265,7 +259,9 @@ fn pbrt_projector_has_constant_intensity_per_texel_and_samples_its_flux() {
     let outcome = chi2_sphere_with(sample, pdf, SAMPLES, 4, 16, 32, &integration);
     assert_chi2(&outcome, sidak(1e-3, 2), "pbrt projector emission");
     // Mitsuba's sampling density (E without cos³θ) is not this one and fails.
-    let mitsuba = ProjectorLight::new(Vec3::new(0.0, 2.0, 0.0), frame, image(), 1.5, 70.0, 4.0 / 3.0).unwrap();
+    let mitsuba =
+        ProjectorLight::new(ProjectorModel::Irradiance, Vec3::new(0.0, 2.0, 0.0), frame, image(), 1.5, 70.0, 4.0 / 3.0)
+            .unwrap();
     let wrong = chi2_sphere_with(
         sample,
         |local: Vec3| mitsuba.emission_pdf(dir_frame.to_world(local)) as f64,

@@ -146,7 +146,7 @@ impl Light {
                 }))
             }
             LightDesc::Projector { model, position, frame, irradiance, scale, fov_x_degrees, aspect } => {
-                Ok(Light::Projector(ProjectorLight::with_model(
+                Ok(Light::Projector(ProjectorLight::new(
                     *model,
                     *position,
                     *frame,

@@ -56,21 +56,10 @@ pub struct ProjectorLight {
 impl ProjectorLight {
     /// A projector at `position` with local axes `frame` (`[x, y, z]`, orthonormal within
     /// 1e-3), projecting `irradiance` times `scale` over a full horizontal field of view of
-    /// `fov_x_degrees` ∈ (0°, 180°) and an image aspect (width/height) `aspect` > 0, in
-    /// Mitsuba 3's model ([`ProjectorModel::Irradiance`]).
+    /// `fov_x_degrees` ∈ (0°, 180°) and an image aspect (width/height) `aspect` > 0, in the
+    /// given model (Mitsuba's [`ProjectorModel::Irradiance`] or pbrt's
+    /// [`ProjectorModel::Intensity`]).
     pub fn new(
-        position: Vec3,
-        frame: [Vec3; 3],
-        irradiance: Arc<Texture>,
-        scale: f32,
-        fov_x_degrees: f32,
-        aspect: f32,
-    ) -> Result<Self, String> {
-        Self::with_model(ProjectorModel::Irradiance, position, frame, irradiance, scale, fov_x_degrees, aspect)
-    }
-
-    /// [`ProjectorLight::new`] in the given model.
-    pub fn with_model(
         model: ProjectorModel,
         position: Vec3,
         frame: [Vec3; 3],
