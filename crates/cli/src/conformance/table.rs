@@ -141,14 +141,18 @@ impl Table {
              are both zero get `vcm compare`'s floor of {} of the value. An entry passes when its \
              two-sided p-value is at least the Šidák level 1 − (1 − α)^(1/n) with α = {} over the n \
              pixel channels. A cell reads PASS iff at least {} % of the entries pass **and** every \
-             channel's image mean is within {} % of the reference's; it shows the fraction of passing \
-             entries and the channel mean ratio (render / reference) farthest from 1, with the \
+             channel's image mean is within {} % of the reference's or, where the means are noisier than \
+             that, within their noise (two-sided p-value of the difference over its standard error \
+             σ, from the same variances, at least the Šidák level of α = {} over the 3 channels); \
+             it shows the fraction of passing entries, the channel mean ratio (render / reference) \
+             farthest from 1, the largest relative σ of a channel mean's difference, and the \
              samples per pixel.\n",
             provenance.reference_spp,
             criteria.relative_floor,
             criteria.alpha,
             100.0 * criteria.pass_fraction,
-            100.0 * criteria.mean_tolerance
+            100.0 * criteria.mean_tolerance,
+            criteria.mean_alpha
         );
         let _ = writeln!(md, "## Results\n");
         let header = self.header();
@@ -200,14 +204,15 @@ pub struct Provenance {
     pub reference_spp: f64,
 }
 
-/// One algorithm's cell: `PASS 99.96% ×1.0021 (868 spp)`.
+/// One algorithm's cell: `PASS 99.96% ×1.0021 ±0.08% (868 spp)`.
 fn cell(outcome: &Outcome) -> String {
     match outcome {
         Outcome::Judged { iterations, verdict } => format!(
-            "{} {:.2}% ×{:.4} ({iterations} spp)",
+            "{} {:.2}% ×{:.4} ±{:.2}% ({iterations} spp)",
             if verdict.passed { "PASS" } else { "FAIL" },
             100.0 * verdict.pass_fraction(),
-            verdict.worst_mean_ratio()
+            verdict.worst_mean_ratio(),
+            100.0 * verdict.largest_mean_error()
         ),
         Outcome::Failed(error) => format!("error: {error}"),
     }
@@ -225,6 +230,7 @@ mod tests {
             threshold_p: 1e-5,
             means_test: [1.0, 2.0, 3.03],
             means_reference: [1.0, 2.0, 3.0],
+            mean_errors: [0.0, 0.0, 0.006],
             passed,
         }
     }
@@ -247,7 +253,7 @@ mod tests {
         };
         assert_eq!(table.counts(), (3, 1, vec![1, 0]));
         let text = table.plain();
-        assert!(text.contains("PASS 99.90% ×1.0100 (64 spp)"), "{text}");
+        assert!(text.contains("PASS 99.90% ×1.0100 ±0.20% (64 spp)"), "{text}");
         assert!(text.contains("error: render panicked") && text.contains("no reference"), "{text}");
         assert!(text.contains("g/b: g/b_path.xml:3:5: unknown bsdf 'x'"), "{text}");
         assert!(text.contains("3 scenes, 1 load and render; passed: pt 1, vcm 0"), "{text}");
@@ -260,7 +266,7 @@ mod tests {
             reference_spp: 32000.0,
         };
         let md = table.markdown(&provenance, &Criteria::MITSUBA);
-        assert!(md.contains("| g/a | yes | PASS 99.90% ×1.0100 (64 spp) | error: render panicked |"), "{md}");
+        assert!(md.contains("| g/a | yes | PASS 99.90% ×1.0100 ±0.20% (64 spp) | error: render panicked |"), "{md}");
         assert!(md.contains("| g/b | no | - | - |") && md.contains("- commit: abc"), "{md}");
         assert!(md.contains("mitsuba-renderer/mitsuba-data") && md.contains("../../common"), "{md}");
     }

@@ -6,8 +6,16 @@
 //! mean, with the variance floor of `vcm compare` ([`crate::ztest::z_score`]) for entries whose
 //! variances are both 0; its two-sided p-value passes when it is at least the Šidák level
 //! `1 − (1 − α)^(1/n)` over the `n` tested entries. The verdict is PASS iff at least
-//! [`Criteria::pass_fraction`] of the entries pass **and** every channel's image mean is within
-//! [`Criteria::mean_tolerance`] (relative) of the reference's.
+//! [`Criteria::pass_fraction`] of the entries pass **and** every channel's image mean agrees
+//! with the reference's: within [`Criteria::mean_tolerance`] (relative), or, where the image
+//! means themselves are noisier than that, within the noise — the difference's two-sided
+//! p-value against its standard error `σ = sqrt(Σ var_a + Σ var_b) / n_pixels` (from the same
+//! variance images) at least the Šidák level of [`Criteria::mean_alpha`] over the 3 channels
+//! (|Δ| ≤ 2.94 σ at 1 %). A fixed 1 % band narrower than the noise of the image means fails
+//! correct renders: on Mitsuba's `bsdf_spheres/test_pointlight` at its budget (868 spp) the
+//! image mean's relative standard error is 1.5–2 %, and Mitsuba's own path tracer misses the
+//! 1 % band on some seeds (docs/lights-suite.md). Where σ is below the 1 % band, as on most
+//! scenes, the band decides.
 //!
 //! An entry whose reference value or reference variance is not finite is left out (counted); an
 //! entry whose test value or variance is not finite fails, and makes that channel's mean
@@ -28,6 +36,9 @@ pub struct Criteria {
     pub mean_tolerance: f64,
     /// Variance floor relative to the value, for zero-variance entries (see `vcm compare`).
     pub relative_floor: f64,
+    /// Family-wise significance (Šidák over the 3 channels) of the image means' agreement
+    /// within their noise, when it exceeds `mean_tolerance`.
+    pub mean_alpha: f64,
 }
 
 impl Criteria {
@@ -38,6 +49,7 @@ impl Criteria {
         pass_fraction: 0.9975,
         mean_tolerance: 0.01,
         relative_floor: crate::ztest::RELATIVE_FLOOR,
+        mean_alpha: 0.01,
     };
 }
 
@@ -56,6 +68,9 @@ pub struct Verdict {
     pub means_test: [f64; 3],
     /// Per-channel image means of the reference over the tested pixels.
     pub means_reference: [f64; 3],
+    /// Per channel, the standard error of `means_test − means_reference` from the variance
+    /// images.
+    pub mean_errors: [f64; 3],
     /// Whether both conditions hold.
     pub passed: bool,
 }
@@ -74,6 +89,17 @@ impl Verdict {
             if a == b { 1.0 } else { a / b }
         });
         ratios.fold(1.0, |worst, r| if r.is_nan() || (r - 1.0).abs() > (worst - 1.0).abs() { r } else { worst })
+    }
+
+    /// The largest relative standard error of a channel's mean difference, `σ_c / mean_ref_c`
+    /// (∞ when a reference mean is 0 and its σ is not).
+    pub fn largest_mean_error(&self) -> f64 {
+        (0..3)
+            .map(|c| {
+                let (sigma, b) = (self.mean_errors[c], self.means_reference[c].abs());
+                if sigma == 0.0 { 0.0 } else { sigma / b }
+            })
+            .fold(0.0, f64::max)
     }
 }
 
@@ -105,6 +131,7 @@ pub fn judge(
     let mut excluded = 0usize;
     let mut scores = Vec::with_capacity(3 * reference.pixels.len());
     let mut sums = [[0.0f64; 3]; 2];
+    let mut variances = [0.0f64; 3];
     let mut counted = [0usize; 3];
     for index in 0..reference.pixels.len() {
         for c in 0..3 {
@@ -118,6 +145,7 @@ pub fn judge(
             let var_a = f64::from(test_variance.pixels[index][c]);
             sums[0][c] += a;
             sums[1][c] += b;
+            variances[c] += var_a + var_b;
             counted[c] += 1;
             // A non-finite render value or variance fails its entry.
             let z = if a.is_finite() && var_a.is_finite() {
@@ -135,9 +163,14 @@ pub fn judge(
     let mean = |sum: f64, count: usize| if count == 0 { 0.0 } else { sum / count as f64 };
     let means_test = std::array::from_fn(|c| mean(sums[0][c], counted[c]));
     let means_reference = std::array::from_fn(|c| mean(sums[1][c], counted[c]));
+    let mean_errors: [f64; 3] =
+        std::array::from_fn(|c| if counted[c] == 0 { 0.0 } else { variances[c].sqrt() / counted[c] as f64 });
+    let mean_level = sidak(criteria.mean_alpha, 3);
     let means_agree = (0..3).all(|c| {
         let (a, b): (f64, f64) = (means_test[c], means_reference[c]);
-        (a - b).abs() <= criteria.mean_tolerance * b.abs()
+        let within_band = (a - b).abs() <= criteria.mean_tolerance * b.abs();
+        let within_noise = mean_errors[c] > 0.0 && two_sided_p((a - b).abs() / mean_errors[c]) >= mean_level;
+        within_band || within_noise
     });
     let fraction_ok = passing as f64 >= criteria.pass_fraction * entries as f64;
     Ok(Verdict {
@@ -147,6 +180,7 @@ pub fn judge(
         threshold_p,
         means_test,
         means_reference,
+        mean_errors,
         passed: fraction_ok && means_agree,
     })
 }
@@ -229,6 +263,41 @@ mod tests {
         // The same render without bias passes.
         let (a, va) = render(&mut rng, 64, 1.0, 0.5, 262_144.0);
         assert!(judge(&a, &va, &b, &vb, &Criteria::MITSUBA).unwrap().passed);
+    }
+
+    #[test]
+    fn noisy_image_means_are_judged_within_their_noise_and_quiet_ones_by_the_band() {
+        // Per-pixel σ = 1.28 t: over 4096 pixels the image mean's relative standard error is
+        // 2 %, as on Mitsuba's point-light sphere scene. A 3 % offset is 1.5 σ: not a bias this
+        // budget can see, so it passes (the 1 % band alone would fail it).
+        let mut rng = Rng::for_stream(11, 0, 0);
+        let (b, vb) = render(&mut rng, 64, 1.0, 0.5, 32000.0);
+        let (mut a, va) = render(&mut rng, 64, 1.0, 1.28, 1.0);
+        // Shift the noisy render's mean to exactly 1.03 × the reference's, per channel.
+        let shift: [f32; 3] = std::array::from_fn(|c| {
+            let mean = |image: &io::Image| image.pixels.iter().map(|p| f64::from(p[c])).sum::<f64>() / 4096.0;
+            (1.03 * mean(&b) - mean(&a)) as f32
+        });
+        for p in &mut a.pixels {
+            for c in 0..3 {
+                p[c] += shift[c];
+            }
+        }
+        let v = judge(&a, &va, &b, &vb, &Criteria::MITSUBA).unwrap();
+        assert!((v.worst_mean_ratio() - 1.03).abs() < 1e-3 && (v.largest_mean_error() - 0.02).abs() < 0.003, "{v:?}");
+        assert!(v.passed, "{v:?}");
+        let band_only = Criteria { mean_alpha: 1.0, ..Criteria::MITSUBA };
+        assert!(!judge(&a, &va, &b, &vb, &band_only).unwrap().passed);
+        // The same 3 % offset judged with variances 7 times smaller (σ ≈ 0.85 %, as 7 times
+        // the samples would give): 3.5 σ, a bias the budget can see, fails.
+        let quieter = io::Image { pixels: va.pixels.iter().map(|p| p.map(|v| v / 7.0)).collect(), ..va.clone() };
+        let v = judge(&a, &quieter, &b, &vb, &lenient_fraction()).unwrap();
+        assert!(v.largest_mean_error() < 0.009 && !v.passed, "{v:?}");
+    }
+
+    /// The rule with the entry fraction switched off (for tests of the mean check alone).
+    fn lenient_fraction() -> Criteria {
+        Criteria { pass_fraction: 0.0, ..Criteria::MITSUBA }
     }
 
     #[test]
