@@ -199,13 +199,13 @@ impl FamilyValues {
 /// How the merging radius is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RadiusMode {
-    /// One radius for the whole image: `radius_factor` × the scene's bounding-sphere radius up
-    /// to [`RADIUS_REFERENCE_PIXELS`] pixels, shrunk by √(reference / pixels) above, so the
+    /// One radius for the whole image: `radius_factor` × the scene's merging scale
+    /// ([`radius::MergingScale`]) up to [`RADIUS_REFERENCE_PIXELS`] pixels, shrunk by √(reference / pixels) above, so the
     /// expected number of light vertices a merge query finds stays that of a 512² image and an
     /// iteration's cost grows linearly with the pixel count ([`base_radius`]).
     Global,
     /// One radius for the whole image at every resolution: `radius_factor` × the scene's
-    /// bounding-sphere radius. Merge queries find more light vertices as the pixel count grows
+    /// merging scale. Merge queries find more light vertices as the pixel count grows
     /// (the cost of merging grows like pixels²), with the bias of a radius that spans more
     /// pixels.
     Fixed,
@@ -223,7 +223,8 @@ pub struct VcmSettings {
     pub algorithm: VcmAlgorithm,
     /// Maximum path length in segments.
     pub max_length: u32,
-    /// Initial merging radius as a fraction of the scene's bounding-sphere radius.
+    /// Initial merging radius as a fraction of the scene's merging scale
+    /// ([`radius::MergingScale`]: its bounding-sphere radius, or the visible part's).
     pub radius_factor: f32,
     /// Radius reduction α: r_i = r_0 · (i+1)^((α−1)/2).
     pub radius_alpha: f32,
