@@ -15,7 +15,7 @@
 //!             ⎩ R_vis              s ≤ 1/4
 //! ```
 //!
-//! A camera that sees most of the scene (a Cornell box through its open side: s ≈ 0.8) keeps
+//! A camera that sees most of the scene (the built-in Cornell boxes: s = 0.97–0.99) keeps
 //! exactly the scene-relative radius, bit for bit; a camera that sees a small part of a large
 //! scene (Mitsuba's projector scenes: a 2000-unit floor seen over ±11 units, s ≈ 0.01) gets a
 //! radius relative to what it sees, so merging does not blur the image over many pixels. The
