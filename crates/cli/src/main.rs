@@ -84,10 +84,11 @@ impl AlgorithmName {
 /// `--radius-mode` values.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub(crate) enum RadiusModeName {
-    /// `--radius-factor` times the scene's bounding-sphere radius, shrunk by √(512² / pixels)
-    /// above 512² pixels: merging costs the same per pixel at every resolution.
+    /// `--radius-factor` times the scene's merging scale (its bounding-sphere radius, or the
+    /// visible part's when the camera sees much less), shrunk by √(512² / pixels) above 512²
+    /// pixels: merging costs the same per pixel at every resolution.
     Global,
-    /// `--radius-factor` times the scene's bounding-sphere radius at every resolution.
+    /// `--radius-factor` times the scene's merging scale at every resolution.
     Fixed,
     /// The pixel's footprint at the first surface it sees.
     PerPixel,
@@ -141,7 +142,8 @@ struct RenderArgs {
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Initial merging radius as a fraction of the scene's bounding-sphere radius.
+    /// Initial merging radius as a fraction of the scene's merging scale: its bounding-sphere
+    /// radius, or the visible part's when the camera sees less than a quarter of it.
     #[arg(long, value_name = "F", default_value_t = 0.003)]
     radius_factor: f32,
     /// Merging radius reduction: r_i = r_0 * (i+1)^((alpha-1)/2), 0 < alpha <= 1.

@@ -78,7 +78,8 @@ pub struct RenderSettings {
     pub threads: usize,
     /// Draw a progress bar on stderr (only when it is a terminal).
     pub progress: bool,
-    /// Initial merging radius as a fraction of the scene's bounding-sphere radius.
+    /// Initial merging radius as a fraction of the scene's merging scale
+    /// ([`crate::vcm::radius::MergingScale`]).
     pub radius_factor: f32,
     /// Merging radius reduction α.
     pub radius_alpha: f32,

@@ -33,7 +33,8 @@ pub struct Request {
     pub max_length: Option<u32>,
     /// Seed of the random streams.
     pub seed: u64,
-    /// Initial merging radius as a fraction of the scene's bounding-sphere radius.
+    /// Initial merging radius as a fraction of the scene's merging scale
+    /// (`render::vcm::radius::MergingScale`).
     pub radius_factor: f32,
     /// Merging radius reduction α, in (0, 1].
     pub radius_alpha: f32,

@@ -42,12 +42,13 @@ pub mod light_vertex;
 pub mod memory;
 pub mod merge;
 pub mod mis;
+pub mod radius;
 mod splats;
 pub mod subpath;
 pub mod technique_images;
 pub mod wavelengths;
 
-use math::{Rng, Vec2};
+use math::Rng;
 use rayon::prelude::*;
 use scene::{FrameBuffer, Scene};
 use spectrum::{Hero4, Rgb, SpectralMode};
@@ -62,6 +63,9 @@ use mis::MisConstants;
 use splats::SplatSums;
 use technique_images::{TechniqueFrame, TechniqueLayout, TechniqueValues};
 use wavelengths::{DEFAULT_WAVELENGTH_GROUPS, WavelengthSource};
+
+use radius::pixel_footprints;
+pub use radius::{RADIUS_REFERENCE_PIXELS, base_radius};
 
 /// The algorithms of the VCM engine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -195,13 +199,13 @@ impl FamilyValues {
 /// How the merging radius is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RadiusMode {
-    /// One radius for the whole image: `radius_factor` × the scene's bounding-sphere radius up
-    /// to [`RADIUS_REFERENCE_PIXELS`] pixels, shrunk by √(reference / pixels) above, so the
+    /// One radius for the whole image: `radius_factor` × the scene's merging scale
+    /// ([`radius::MergingScale`]) up to [`RADIUS_REFERENCE_PIXELS`] pixels, shrunk by √(reference / pixels) above, so the
     /// expected number of light vertices a merge query finds stays that of a 512² image and an
     /// iteration's cost grows linearly with the pixel count ([`base_radius`]).
     Global,
     /// One radius for the whole image at every resolution: `radius_factor` × the scene's
-    /// bounding-sphere radius. Merge queries find more light vertices as the pixel count grows
+    /// merging scale. Merge queries find more light vertices as the pixel count grows
     /// (the cost of merging grows like pixels²), with the bias of a radius that spans more
     /// pixels.
     Fixed,
@@ -212,25 +216,6 @@ pub enum RadiusMode {
     PerPixel,
 }
 
-/// The pixel count up to which [`RadiusMode::Global`] uses the scene-relative radius unscaled
-/// (512², the resolution of SmallVCM's scenes, on which the default radius factor was chosen).
-pub const RADIUS_REFERENCE_PIXELS: u64 = 512 * 512;
-
-/// The merging radius of the first iteration (world units) before the per-pixel footprints:
-/// `radius_factor` × the scene's bounding-sphere radius, times √([`RADIUS_REFERENCE_PIXELS`] /
-/// pixels) above the reference pixel count in [`RadiusMode::Global`]. (N_L light sub-paths, one
-/// per pixel, over a disc of radius r: a query finds on average ∝ N_L r² light vertices, which
-/// this scaling keeps constant.)
-pub fn base_radius(scene: &Scene, settings: &VcmSettings) -> f32 {
-    let radius = settings.radius_factor * scene.bounding_sphere.radius;
-    let pixels = scene.camera.pixel_count() as u64;
-    if settings.radius_mode == RadiusMode::Global && pixels > RADIUS_REFERENCE_PIXELS {
-        radius * (RADIUS_REFERENCE_PIXELS as f64 / pixels as f64).sqrt() as f32
-    } else {
-        radius
-    }
-}
-
 /// Settings of the engine.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VcmSettings {
@@ -238,7 +223,8 @@ pub struct VcmSettings {
     pub algorithm: VcmAlgorithm,
     /// Maximum path length in segments.
     pub max_length: u32,
-    /// Initial merging radius as a fraction of the scene's bounding-sphere radius.
+    /// Initial merging radius as a fraction of the scene's merging scale
+    /// ([`radius::MergingScale`]: its bounding-sphere radius, or the visible part's).
     pub radius_factor: f32,
     /// Radius reduction α: r_i = r_0 · (i+1)^((α−1)/2).
     pub radius_alpha: f32,
@@ -1003,49 +989,9 @@ fn render_pixels(
         .reduce(RejectedCounts::default, sum)
 }
 
-/// Per-pixel merging radii before the iteration schedule: the radius of a disc with the area
-/// of the pixel's footprint at the first surface hit by the ray through its centre (and the
-/// lens centre), [`scene::Camera::footprint_radius`]: `d·sqrt(cos³/π)/f` for perspective
-/// cameras (d the distance, f the image-plane distance in pixels, cos at the camera),
-/// `sqrt(A_pixel/π)` for the orthographic camera. Pixels that see nothing get `fallback`.
-fn pixel_footprints(scene: &Scene, fallback: f32) -> Vec<f32> {
-    let camera = &scene.camera;
-    let width = camera.width as usize;
-    (0..camera.pixel_count())
-        .into_par_iter()
-        .map(|index| {
-            let raster = Vec2::new((index % width) as f32 + 0.5, (index / width) as f32 + 0.5);
-            let ray = camera.generate_ray(raster);
-            match scene.intersect(&ray) {
-                None => fallback,
-                Some(hit) => camera.footprint_radius(&ray, hit.distance),
-            }
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn global_radius_keeps_the_expected_vertices_per_query_above_512_squared() {
-        let settings =
-            |mode| VcmSettings { radius_mode: mode, ..VcmSettings::new(VcmAlgorithm::VertexConnectionMerging) };
-        let radius = |w: u32, h: u32, mode| base_radius(&scene::cornell::build(0, w, h).unwrap(), &settings(mode));
-        let unscaled = radius(64, 64, RadiusMode::Fixed);
-        assert!(unscaled > 0.0);
-        // Up to 512² pixels (and for the fixed mode everywhere) the scene-relative radius.
-        for (w, h) in [(64, 64), (512, 512), (1024, 256)] {
-            assert_eq!(radius(w, h, RadiusMode::Global), unscaled, "{w}x{h}");
-        }
-        for (w, h) in [(1024, 1024), (4096, 2048)] {
-            assert_eq!(radius(w, h, RadiusMode::Fixed), unscaled);
-        }
-        // N_L r² constant: 4x the pixels, half the radius; 32x the pixels, 1/√32.
-        assert!((radius(1024, 1024, RadiusMode::Global) / unscaled - 0.5).abs() < 1e-6);
-        assert!((radius(4096, 2048, RadiusMode::Global) / unscaled - 32f32.sqrt().recip()).abs() < 1e-6);
-    }
 
     #[test]
     fn non_finite_estimates_are_counted_per_family_and_never_added() {
