@@ -1,0 +1,1 @@
+//! Tests of the SDF grid and its tessellation.
