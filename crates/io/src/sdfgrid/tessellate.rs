@@ -29,7 +29,7 @@ pub(crate) enum NormalMode {
 }
 
 /// Most triangles a tessellation may make.
-pub(crate) const MAX_TRIANGLES: usize = 1 << 26;
+pub(crate) const MAX_TRIANGLES: usize = 1 << 24;
 
 /// A tessellation in the grid's object space (the unit cube).
 #[derive(Clone, Debug, Default)]
