@@ -26,6 +26,7 @@ mod linear_image;
 mod loop_subdivision;
 mod options;
 mod pfm;
+mod sdfgrid;
 mod srgb;
 mod texture_file;
 mod via_image;

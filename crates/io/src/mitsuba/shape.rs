@@ -1,9 +1,11 @@
 //! `<shape>` plugins: meshes from files, Mitsuba's analytic rectangle, cube, sphere and disk,
-//! its cylinder as a tessellated mesh (see `crate::cylinder`), and instancing: a `shapegroup`
+//! its cylinder and `sdfgrid` as tessellated meshes (see `crate::cylinder`, `crate::sdfgrid`),
+//! and instancing: a `shapegroup`
 //! (shapes in their own space, referenced by id) placed by `instance` shapes with a
 //! `to_world` (see `scene::instance`).
 
 use crate::curves::{Basis, curve_mesh, read_curves};
+use crate::sdfgrid::{NormalMode, read_vol, sdfgrid_mesh};
 use math::{Vec2, Vec3};
 use scene::desc::{Geometry, InstanceDesc, MeshData, ObjectDesc, ShapeDesc};
 use scene::instance::Affine3A;
@@ -31,28 +33,29 @@ pub(crate) fn rectangle_mesh() -> MeshData {
     }
 }
 
-/// Mitsuba's `cube`: `[-1, 1]³`, four vertices per face, normals outward (by the winding).
+/// Mitsuba's `cube`: `[-1, 1]³`, four vertices per face, normals outward (by the winding), and
+/// Mitsuba's uv layout: face `s`'s corners, in the order listed, get uv `(0, 1)`, `(1, 1)`,
+/// `(1, 0)`, `(0, 0)`, and its triangles are corners `(0, 1, 2)` and `(3, 0, 2)`.
 pub(crate) fn cube_mesh() -> MeshData {
+    // Corners of each face (-y, +y, +x, +z, -x, -z), ±1 per axis.
+    const FACES: [[[f32; 3]; 4]; 6] = [
+        [[1., -1., -1.], [1., -1., 1.], [-1., -1., 1.], [-1., -1., -1.]],
+        [[1., 1., -1.], [-1., 1., -1.], [-1., 1., 1.], [1., 1., 1.]],
+        [[1., -1., -1.], [1., 1., -1.], [1., 1., 1.], [1., -1., 1.]],
+        [[1., -1., 1.], [1., 1., 1.], [-1., 1., 1.], [-1., -1., 1.]],
+        [[-1., -1., 1.], [-1., 1., 1.], [-1., 1., -1.], [-1., -1., -1.]],
+        [[1., 1., -1.], [1., -1., -1.], [-1., -1., -1.], [-1., 1., -1.]],
+    ];
+    const UVS: [[f32; 2]; 4] = [[0., 1.], [1., 1.], [1., 0.], [0., 0.]];
     let mut mesh = MeshData::default();
-    for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            // Tangent axes (b, c) with e_b × e_c = sign · e_axis.
-            let (mut b, mut c) = ((axis + 1) % 3, (axis + 2) % 3);
-            if sign < 0.0 {
-                std::mem::swap(&mut b, &mut c);
-            }
-            let base = mesh.positions.len() as u32;
-            for (u, v) in [(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                let mut p = [0.0f32; 3];
-                p[axis] = sign;
-                p[b] = u;
-                p[c] = v;
-                mesh.positions.push(Vec3::from_array(p));
-                mesh.uvs.push(Vec2::new(0.5 * (u + 1.0), 0.5 * (v + 1.0)));
-            }
-            mesh.triangles.push([base, base + 1, base + 2]);
-            mesh.triangles.push([base + 2, base + 3, base]);
+    for face in FACES {
+        let base = mesh.positions.len() as u32;
+        for (corner, uv) in face.iter().zip(UVS) {
+            mesh.positions.push(Vec3::from_array(*corner));
+            mesh.uvs.push(Vec2::from_array(uv));
         }
+        mesh.triangles.push([base, base + 1, base + 2]);
+        mesh.triangles.push([base + 3, base, base + 2]);
     }
     mesh
 }
@@ -116,6 +119,7 @@ impl<'a> Loader<'a> {
         let to_world = p.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
         let flip = p.boolean_or("flip_normals", false)?;
         let what = p.what();
+        let mut sphere_frame = None;
         let geometry = match p.ty.as_str() {
             "obj" | "ply" | "serialized" => {
                 let filename = p.string_required("filename")?.to_string();
@@ -218,6 +222,17 @@ impl<'a> Loader<'a> {
                          (non-uniform scales would make an ellipsoid)",
                     ));
                 }
+                // Mitsuba's uv is taken in the sphere's own axes: when to_world turns them, the
+                // sphere is placed as an instance of a unit sphere (see below).
+                let turned = axes.iter().enumerate().any(|(i, a)| {
+                    (0..3).any(|j| {
+                        let expected = if i == j { r } else { 0.0 };
+                        (a[j] - expected).abs() > tolerance
+                    })
+                });
+                if turned {
+                    sphere_frame = affine(&m);
+                }
                 Geometry::Sphere { center: to_vec3(m.point([0.0; 3])), radius: r as f32, flip_normals: flip }
             }
             "disk" => {
@@ -254,6 +269,23 @@ impl<'a> Loader<'a> {
                     &what,
                     &mut self.warnings,
                 )?)
+            }
+            "sdfgrid" => {
+                if flip {
+                    return Err(p.error("'flip_normals' is not a parameter of Mitsuba's sdfgrid"));
+                }
+                let mode = match p.string("normals")?.unwrap_or("smooth") {
+                    "smooth" => NormalMode::Smooth,
+                    "analytic" => NormalMode::Analytic,
+                    other => {
+                        return Err(p.error(format!("'normals' is '{other}', expected 'smooth' or 'analytic'")));
+                    }
+                };
+                let filename = p.string_required("filename")?.to_string();
+                let path = self.resolve_file(&filename, node)?;
+                let grid = read_vol(&path).map_err(|e| p.error(e))?;
+                let mesh = sdfgrid_mesh(&grid, mode).map_err(|e| p.error(format!("{}: {e}", path.display())))?;
+                Geometry::Mesh(transform_mesh(mesh, &to_world, false, false, &node.pos, &what, &mut self.warnings)?)
             }
             other => return Err(p.error(format!("unsupported shape type '{other}'"))),
         };
@@ -338,6 +370,9 @@ impl<'a> Loader<'a> {
                 _ => {}
             }
         }
+        if emission.is_some() && p.ty == "sdfgrid" {
+            return Err(p.error("an sdfgrid cannot be an area emitter (nor in Mitsuba 3)"));
+        }
         let material = match material {
             Some(m) => m,
             None => self.default_material(),
@@ -355,7 +390,27 @@ impl<'a> Loader<'a> {
             }
             self.media.shapes.insert(self.shapes.len() as u32, interface);
         }
-        self.shapes.push(ShapeDesc { name, geometry, material, emission, alpha });
+        let shape = ShapeDesc { name, geometry, material, emission, alpha };
+        match sphere_frame {
+            // A turned sphere (no emitter, no media, not already in a shapegroup) becomes a unit
+            // sphere in an object of its own, placed by an instance, so that its uv follows its
+            // axes. Otherwise (and for emitters, whose uv matters only when textured) the
+            // world-space sphere keeps uv in world axes.
+            Some(to_world)
+                if shape.emission.is_none()
+                    && !self.in_shapegroup
+                    && !self.media.shapes.contains_key(&(self.shapes.len() as u32)) =>
+            {
+                let flip_normals = matches!(shape.geometry, Geometry::Sphere { flip_normals: true, .. });
+                let unit = Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals };
+                let object = self.objects.len() as u32;
+                let name = shape.name.clone();
+                self.objects
+                    .push(ObjectDesc { name: name.clone(), shapes: vec![ShapeDesc { geometry: unit, ..shape }] });
+                self.instances.push(InstanceDesc { name, object, to_world });
+            }
+            _ => self.shapes.push(shape),
+        }
         Ok(())
     }
 }
