@@ -65,7 +65,7 @@ impl Scene {
         let primitives = std::mem::take(&mut parts.primitives);
         let (objects, instances) = build_instances(desc, &mut parts)?;
         let media = crate::medium::build::media(&desc.media, &shape_primitives, primitives.len(), desc)?;
-        let Parts { attributes, alpha_masks, mut lights, mut light_spectra, mut report, .. } = parts;
+        let Parts { attributes, alpha_masks, mut lights, mut light_spectra, mut light_groups, mut report, .. } = parts;
         let mut environments = 0;
         for (index, light) in desc.lights.iter().enumerate() {
             if let LightDesc::Spot { texture: Some(SpotTexture { texture: t, .. }), .. }
@@ -77,6 +77,7 @@ impl Scene {
             if matches!(light, LightDesc::Constant { .. } | LightDesc::EnvMap { .. }) {
                 environments += 1;
             }
+            light_groups.push(lights.len() as u32);
             lights.push(Light::from_desc(light).map_err(|e| format!("light {index}: {e}"))?);
             light_spectra.push(match spectra.lights.get(&(index as u32)) {
                 Some(s) => Some(light_spectrum(light, s).map_err(|e| format!("light {index}: {e}"))?),
@@ -105,7 +106,8 @@ impl Scene {
         .with_attributes(attributes)
         .with_alpha_masks(alpha_masks)
         .with_media(media)
-        .with_light_spectra(if light_spectra.iter().any(Option::is_some) { light_spectra } else { Vec::new() });
+        .with_light_spectra(if light_spectra.iter().any(Option::is_some) { light_spectra } else { Vec::new() })
+        .with_light_groups(&light_groups)?;
         Ok((scene, report))
     }
 }
@@ -158,6 +160,9 @@ struct Parts {
     alpha_masks: Vec<AlphaMask>,
     lights: Vec<Light>,
     light_spectra: Vec<Option<LightSpectrum>>,
+    /// By light: the emitter it belongs to (the index of that emitter's first light), for
+    /// light selection ([`Scene::with_light_groups`]).
+    light_groups: Vec<u32>,
     report: BuildReport,
     /// The mesh attribute each material reads, by material index.
     material_attributes: Vec<Option<String>>,
@@ -208,6 +213,7 @@ impl Parts {
         }
         let alpha = self.alpha_mask(shape)?;
         let first_primitive = self.primitives.len();
+        let first_light = self.lights.len() as u32;
         let attribute_name = self.material_attributes.get(shape.material as usize).and_then(Option::as_deref);
         match &shape.geometry {
             Geometry::Mesh(mesh) => {
@@ -299,6 +305,8 @@ impl Parts {
         for primitive in &mut self.primitives[first_primitive..] {
             primitive.alpha = alpha;
         }
+        // All lights of this shape form one emitter.
+        self.light_groups.resize(self.lights.len(), first_light);
         Ok(())
     }
 

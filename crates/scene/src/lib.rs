@@ -13,6 +13,7 @@ pub mod film;
 pub mod filter;
 pub mod instance;
 pub mod light;
+pub mod light_selection;
 pub mod material;
 pub mod medium;
 pub mod microfacet;

@@ -14,6 +14,7 @@ use crate::camera::Camera;
 use crate::desc::EmissionSpectrum;
 use crate::instance::{Instance, Object};
 use crate::light::{BoundingSphere, Light};
+use crate::light_selection::light_selection_weights;
 use crate::material::{Material, ShadingPoint, SurfaceTangents};
 use crate::medium::Media;
 use crate::shape::Shape;
@@ -136,7 +137,8 @@ pub struct Scene {
     pub media: Media,
     /// Emission spectra by light index (missing or `None`: the RGB value is upsampled).
     light_spectra: Vec<Option<LightSpectrum>>,
-    /// Light selection ([`light_selection_weights`]).
+    /// Light selection ([`light_selection_weights`]; each light its own emitter unless
+    /// [`Scene::with_light_groups`] said otherwise).
     light_selection: Option<Distribution1D>,
     /// By material index: whether the material reads a mesh attribute.
     reads_mesh_attribute: Vec<bool>,
@@ -180,8 +182,9 @@ impl Scene {
         let background = lights.iter().position(Light::is_environment).map(|i| i as u32);
         let bvh = Bvh::build(&bounds);
         let bounding_sphere = BoundingSphere { center, radius };
-        let powers: Vec<f32> = lights.iter().map(|l| l.power(&bounding_sphere)).collect();
-        let light_selection = Distribution1D::new(&light_selection_weights(&powers));
+        // One emitter per light (one id per light: cannot fail).
+        let own_groups: Vec<u32> = (0..lights.len() as u32).collect();
+        let light_selection = light_selection(&lights, &bounding_sphere, &own_groups).unwrap_or(None);
         let reads_mesh_attribute = materials.iter().map(|m| matches!(m.mesh_attribute(), Ok(Some(_)))).collect();
         let anisotropic = materials.iter().map(Material::is_anisotropic).collect();
         Self {
@@ -223,6 +226,14 @@ impl Scene {
     pub fn with_attributes(mut self, attributes: Vec<SurfaceAttributes>) -> Self {
         self.attributes = attributes;
         self
+    }
+
+    /// Groups the lights into the emitters they came from (`groups[i]`: any id of light `i`'s
+    /// emitter, e.g. the shape whose triangles it is) for light selection
+    /// ([`light_selection_weights`]). Fails when there is not one id per light.
+    pub fn with_light_groups(mut self, groups: &[u32]) -> Result<Self, String> {
+        self.light_selection = light_selection(&self.lights, &self.bounding_sphere, groups)?;
+        Ok(self)
     }
 
     /// Sets the alpha masks that primitives refer to.
@@ -501,44 +512,13 @@ impl LightSpectrum {
     }
 }
 
-/// Light selection weights from the lights' emitted powers: half in proportion to power, half
-/// uniform over the lights that emit (a defensive mixture). Pure power selection starves a weak
-/// light beside a strong one (a spot beside an environment with 2.5 % of the power was picked
-/// by 1 sample in 40 and left pixels it lights without a sample); pure uniform selection wastes
-/// samples on weak lights. The mixture's probability is at least half of either's, so its
-/// variance is at most twice theirs wherever they do well. Lights of zero power are never
-/// picked; if every light has zero power (or there are none), nothing is. Equal powers give
-/// equal probabilities, as before.
-pub fn light_selection_weights(powers: &[f32]) -> Vec<f32> {
-    let emitting = powers.iter().filter(|p| **p > 0.0).count();
-    let total: f64 = powers.iter().filter(|p| **p > 0.0).map(|p| f64::from(*p)).sum();
-    if emitting == 0 || !(total.is_finite() && total > 0.0) {
-        return powers.to_vec();
-    }
-    powers
-        .iter()
-        .map(|&p| if p > 0.0 { (0.5 * f64::from(p) / total + 0.5 / emitting as f64) as f32 } else { 0.0 })
-        .collect()
-}
-
-#[cfg(test)]
-mod light_selection_tests {
-    use super::light_selection_weights;
-
-    fn probabilities(powers: &[f32]) -> Vec<f32> {
-        let w = light_selection_weights(powers);
-        let total: f32 = w.iter().sum();
-        w.iter().map(|x| x / total).collect()
-    }
-
-    #[test]
-    fn half_power_half_uniform() {
-        // A spot with 2.5 % of the power beside an environment: 0.5 · 0.025 + 0.5 / 2.
-        let p = probabilities(&[1.0, 39.0]);
-        assert!((p[0] - 0.2625).abs() < 1e-6 && (p[1] - 0.7375).abs() < 1e-6, "{p:?}");
-        // Equal powers stay uniform; a light of zero power is never picked.
-        assert_eq!(probabilities(&[3.0, 3.0, 0.0]), vec![0.5, 0.5, 0.0]);
-        // Nothing emits: nothing to pick (all weights zero).
-        assert_eq!(light_selection_weights(&[0.0, 0.0]), vec![0.0, 0.0]);
-    }
+/// The light selection distribution over `lights` ([`light_selection_weights`]) with the
+/// emitter id `groups[i]` of each light.
+fn light_selection(
+    lights: &[Light],
+    sphere: &BoundingSphere,
+    groups: &[u32],
+) -> Result<Option<Distribution1D>, String> {
+    let powers: Vec<f32> = lights.iter().map(|l| l.power(sphere)).collect();
+    Ok(Distribution1D::new(&light_selection_weights(&powers, groups)?))
 }
