@@ -13,8 +13,8 @@ latency. The table between `<!-- mpi-scaling:begin -->` and `<!-- mpi-scaling:en
 replaced, stamped with date, commit, machine and commands. Python 3 standard library only;
 numbers are only meaningful on a quiet machine.
 
-Usage: scripts/mpi-scaling.py SINGLE_BIN MPI_BIN [--resolution 256x256] [--iterations 16]
-       [--repeats 2] [--bandwidth-gbit 10] [--doc docs/distributed.md]
+Usage: scripts/mpi-scaling.py SINGLE_BIN MPI_BIN [--resolution 512x512] [--iterations 32]
+       [--repeats 3] [--bandwidth-gbit 10] [--doc docs/distributed.md]
 """
 
 import argparse
@@ -46,9 +46,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("single")
     parser.add_argument("mpi")
-    parser.add_argument("--resolution", default="256x256")
-    parser.add_argument("--iterations", type=int, default=16)
-    parser.add_argument("--repeats", type=int, default=2)
+    parser.add_argument("--resolution", default="512x512")
+    parser.add_argument("--iterations", type=int, default=32)
+    parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--bandwidth-gbit", type=float, default=10.0)
     parser.add_argument("--scene", default="1")
     parser.add_argument("--doc", default="docs/distributed.md")
