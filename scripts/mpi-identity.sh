@@ -19,6 +19,18 @@ mpirun_=(mpirun --oversubscribe)
 passed=0
 failed=0
 
+# result STATUS NAME LOG: counts test NAME as passed when STATUS is 0, else as failed and shows LOG.
+result() {
+    if [ "$1" -eq 0 ]; then
+        echo "test $2 ... ok"
+        passed=$((passed + 1))
+    else
+        echo "test $2 ... FAILED"
+        cat "$3"
+        failed=$((failed + 1))
+    fi
+}
+
 # check NAME ARGS...: one single-process render, then 1, 2 and 3 ranks with the same arguments.
 check() {
     local name=$1
@@ -26,15 +38,9 @@ check() {
     "$single" render "$@" --quiet --threads 1 -o "$out/$name-single.exr" 2>"$out/$name-single.log" || {
         echo "FAIL $name: the single-process render failed"; cat "$out/$name-single.log"; failed=$((failed + 1)); return; }
     for n in 1 2 3; do
-        if "${mpirun_[@]}" -np "$n" "$mpi" render "$@" --quiet --threads 1 -o "$out/$name-$n.exr" \
-            >"$out/$name-$n.log" 2>&1 && cmp -s "$out/$name-single.exr" "$out/$name-$n.exr"; then
-            echo "test $name with $n ranks ... ok"
-            passed=$((passed + 1))
-        else
-            echo "test $name with $n ranks ... FAILED"
-            cat "$out/$name-$n.log"
-            failed=$((failed + 1))
-        fi
+        "${mpirun_[@]}" -np "$n" "$mpi" render "$@" --quiet --threads 1 -o "$out/$name-$n.exr" \
+            >"$out/$name-$n.log" 2>&1 && cmp -s "$out/$name-single.exr" "$out/$name-$n.exr"
+        result $? "$name with $n ranks" "$out/$name-$n.log"
     done
 }
 
@@ -65,16 +71,10 @@ for n in 2 3; do
     "${mpirun_[@]}" -np "$n" "$mpi" render --scene 1 --algorithm vcm --resolution 32x24 --time 0.5 --threads 1 \
         --quiet -o "$out/$name.exr" >"$out/$name.log" 2>&1
     iterations=$(grep -o '[0-9]* iterations' "$out/$name.log" | head -1 | cut -d' ' -f1)
-    if [ -n "$iterations" ] && [ $((iterations % n)) -eq 0 ] && grep -q "x $n ranks" "$out/$name.log" &&
+    [ -n "$iterations" ] && [ $((iterations % n)) -eq 0 ] && grep -q "x $n ranks" "$out/$name.log" &&
         "$single" render --scene 1 --algorithm vcm --resolution 32x24 --iterations "$iterations" --threads 1 --quiet \
-            -o "$out/$name-single.exr" 2>/dev/null && cmp -s "$out/$name.exr" "$out/$name-single.exr"; then
-        echo "test --time with $n ranks ($iterations iterations) ... ok"
-        passed=$((passed + 1))
-    else
-        echo "test --time with $n ranks ... FAILED"
-        cat "$out/$name.log"
-        failed=$((failed + 1))
-    fi
+            -o "$out/$name-single.exr" 2>/dev/null && cmp -s "$out/$name.exr" "$out/$name-single.exr"
+    result $? "--time with $n ranks (${iterations:-no} iterations)" "$out/$name.log"
 done
 
 # check_slices NAME N ARGS...: N slices merged equal one process with --sums fixed (image and
@@ -97,16 +97,10 @@ check_slices() {
         fi
         parts+=("$out/$name-part-$k.ckpt")
     done
-    if "$single" merge "${parts[@]}" -o "$out/$name-merged.exr" --checkpoint "$out/$name-merged.ckpt" \
+    "$single" merge "${parts[@]}" -o "$out/$name-merged.exr" --checkpoint "$out/$name-merged.ckpt" \
         >>"$out/$name-parts.log" 2>&1 && cmp -s "$out/$name-fixed.exr" "$out/$name-merged.exr" &&
-        cmp -s "$out/$name-fixed.ckpt" "$out/$name-merged.ckpt"; then
-        echo "test $name: $count slices merged (ranks per slice: ${SLICE_RANKS:-1}) ... ok"
-        passed=$((passed + 1))
-    else
-        echo "test $name: $count slices merged ... FAILED"
-        cat "$out/$name-parts.log"
-        failed=$((failed + 1))
-    fi
+        cmp -s "$out/$name-fixed.ckpt" "$out/$name-merged.ckpt"
+    result $? "$name: $count slices merged (ranks per slice: ${SLICE_RANKS:-1})" "$out/$name-parts.log"
 }
 
 for scene in 0 1 2 3; do
@@ -126,27 +120,15 @@ SLICE_RANKS=2 check_slices slices-vcm-on-ranks 2 --scene 1 --algorithm vcm --res
 # A missing slice is an error naming it (exit code 2, no image).
 "$single" merge "$out/slices-pt-1-part-0.ckpt" "$out/slices-pt-1-part-2.ckpt" -o "$out/missing.exr" >"$out/missing.log" 2>&1
 code=$?
-if [ "$code" -eq 2 ] && grep -q "slices missing: 1/3" "$out/missing.log" && [ ! -f "$out/missing.exr" ]; then
-    echo "test a missing slice is named ... ok"
-    passed=$((passed + 1))
-else
-    echo "test a missing slice is named ... FAILED (exit code $code)"
-    cat "$out/missing.log"
-    failed=$((failed + 1))
-fi
+[ "$code" -eq 2 ] && grep -q "slices missing: 1/3" "$out/missing.log" && [ ! -f "$out/missing.exr" ]
+result $? "a missing slice is named (exit code $code)" "$out/missing.log"
 
 # A scene that fails to load ends every rank with exit code 2 (no hang: bounded by timeout).
 printf '<scene version="3.0.0">\n<shape type="nonsense"/>\n' >"$out/bad.xml"
 timeout 120 "${mpirun_[@]}" -np 2 "$mpi" render --scene "$out/bad.xml" --quiet -o "$out/bad.exr" >"$out/bad.log" 2>&1
 code=$?
-if [ "$code" -ne 0 ] && [ "$code" -ne 124 ] && grep -q "^error: " "$out/bad.log" && [ ! -f "$out/bad.exr" ]; then
-    echo "test a bad scene ends every rank ... ok"
-    passed=$((passed + 1))
-else
-    echo "test a bad scene ends every rank ... FAILED (exit code $code)"
-    cat "$out/bad.log"
-    failed=$((failed + 1))
-fi
+[ "$code" -ne 0 ] && [ "$code" -ne 124 ] && grep -q "^error: " "$out/bad.log" && [ ! -f "$out/bad.exr" ]
+result $? "a bad scene ends every rank (exit code $code)" "$out/bad.log"
 
 if [ "$failed" -eq 0 ]; then status=ok; else status=FAILED; fi
 echo "test result: $status. $passed passed; $failed failed; (scripts/mpi-identity.sh)"
