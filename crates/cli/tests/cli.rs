@@ -361,10 +361,10 @@ fn resume_refuses_a_changed_scene_and_names_the_file() {
     assert!(output.status.success(), "{}", stderr(&output));
     // A checkpoint of the previous format (no scene record) is refused with the reason.
     let old = dir.join("old.ckpt");
-    std::fs::write(&old, header.replacen("vcm-checkpoint 3", "vcm-checkpoint 2", 1)).unwrap();
+    std::fs::write(&old, header.replacen("vcm-checkpoint 4", "vcm-checkpoint 2", 1)).unwrap();
     assert_fails(
         &["render", "--resume", old.to_str().unwrap(), "-o", out_arg],
-        &["has format 2", "does not record the scene", "reads format 3"],
+        &["has format 2", "does not record the scene", "reads format 4"],
     );
     // One written by another version of vcm.
     let other = dir.join("other.ckpt");
@@ -372,7 +372,7 @@ fn resume_refuses_a_changed_scene_and_names_the_file() {
     std::fs::write(&other, header.replacen(&format!("vcm_version={version}"), "vcm_version=0.0.1", 1)).unwrap();
     assert_fails(
         &["render", "--resume", other.to_str().unwrap(), "-o", out_arg],
-        &["written by vcm 0.0.1 (checkpoint format 3)", &format!("this is vcm {version}")],
+        &["written by vcm 0.0.1 (checkpoint format 4)", &format!("this is vcm {version}")],
     );
 }
 
