@@ -117,6 +117,28 @@ impl FilmSums {
             FilmSums::Fixed { .. } => Summation::Fixed,
         }
     }
+
+    /// Adds `other`'s fixed-point sums to these (exact, in any order): both must be fixed-point
+    /// sums of the same length, with or without sums of squares alike.
+    pub fn add(&mut self, other: &FilmSums) -> Result<(), String> {
+        if self.lengths() != other.lengths() {
+            return Err("the films differ in size or in keeping sums of squares".into());
+        }
+        let (
+            FilmSums::Fixed { sums, squares, largest },
+            FilmSums::Fixed { sums: other_sums, squares: other_squares, largest: other_largest },
+        ) = (self, other)
+        else {
+            return Err(ONLY_FIXED.into());
+        };
+        for (a, b) in sums.iter_mut().zip(other_sums).chain(squares.iter_mut().zip(other_squares)) {
+            for c in 0..3 {
+                a[c] = a[c].wrapping_add(b[c]);
+            }
+        }
+        *largest = largest.max(*other_largest);
+        Ok(())
+    }
 }
 
 /// Accumulated image: the sum of the iterations' frames in double precision or in exact fixed
@@ -281,9 +303,6 @@ impl Film {
                 self.width, self.height, other.width, other.height
             ));
         }
-        if other.has_variance() != self.has_variance() {
-            return Err("one film keeps sums of squares and the other does not".into());
-        }
         if (self.summation(), other.summation()) != (Summation::Fixed, Summation::Fixed) {
             return Err(ONLY_FIXED.into());
         }
@@ -300,19 +319,7 @@ impl Film {
                 self.next_iteration()
             ));
         };
-        let (
-            FilmSums::Fixed { sums, squares, largest },
-            FilmSums::Fixed { sums: other_sums, squares: other_squares, largest: other_largest },
-        ) = (&mut self.sums, &other.sums)
-        else {
-            return Err(ONLY_FIXED.into());
-        };
-        for (a, b) in sums.iter_mut().zip(other_sums).chain(squares.iter_mut().zip(other_squares)) {
-            for c in 0..3 {
-                a[c] = a[c].wrapping_add(b[c]);
-            }
-        }
-        *largest = largest.max(*other_largest);
+        self.sums.add(&other.sums)?;
         self.first_iteration = first;
         self.iterations += other.iterations;
         self.rejected_samples += other.rejected_samples;
@@ -344,6 +351,11 @@ impl Film {
         &self.sums
     }
 
+    /// The sums in their own representation, taken out of the film.
+    pub fn into_raw_sums(self) -> FilmSums {
+        self.sums
+    }
+
     /// A film with the given sums and counts (a checkpoint being resumed, or a slice): it holds
     /// iterations `first_iteration..first_iteration + iterations`; `None` when the lengths of
     /// the sums do not match the size (the sums of squares may be empty: no variance).
@@ -365,21 +377,6 @@ impl Film {
             iterations,
             rejected_samples,
         })
-    }
-
-    /// An f64 film with the given sums, sums of squares and counts, starting at iteration 0;
-    /// `None` when their lengths do not match the size.
-    pub fn from_sums(
-        width: u32,
-        height: u32,
-        sums: Vec<[f64; 3]>,
-        sum_squares: Vec<[f64; 3]>,
-        iterations: u64,
-        rejected_samples: u64,
-    ) -> Option<Self> {
-        let pixels = width as usize * height as usize;
-        (sum_squares.len() == pixels).then_some(())?;
-        Self::from_raw(width, height, FilmSums::Float { sums, squares: sum_squares }, 0, iterations, rejected_samples)
     }
 
     /// Per pixel and channel, the estimated variance of the mean over iterations (the squared

@@ -26,7 +26,7 @@ use anyhow::{Context, Result, bail};
 use scene::{Film, FilmSums, Summation};
 
 use crate::fingerprint::Fingerprint;
-use crate::slice::Slice;
+use crate::slice::{Slice, SliceSpec};
 
 /// The settings a checkpoint records (as the command line spells them).
 #[derive(Clone, Debug, PartialEq)]
@@ -240,13 +240,9 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
         slice: match fields.get("slice") {
             None => None,
             Some(text) => {
-                let (index, count) = text
-                    .split_once('/')
-                    .and_then(|(k, n)| Some((k.parse::<u32>().ok()?, n.parse::<u32>().ok()?)))
-                    .filter(|(k, n)| k < n)
-                    .ok_or_else(|| missing("slice"))?;
+                let spec = SliceSpec::parse(text).map_err(|_| missing("slice"))?;
                 let iterations = field(&fields, "slice_iterations").ok_or_else(|| missing("slice_iterations"))?;
-                Some(Slice { index, count, iterations })
+                Some(Slice { index: spec.index, count: spec.count, iterations })
             }
         },
     };
@@ -319,7 +315,8 @@ mod tests {
         };
         let sums: Vec<[f64; 3]> = (0..6).map(|i| [i as f64 * 0.1, 1.0 / 3.0, f64::MIN_POSITIVE]).collect();
         let squares: Vec<[f64; 3]> = (0..6).map(|i| [i as f64, 0.5, 1e300]).collect();
-        let film = Film::from_sums(3, 2, sums.clone(), squares.clone(), 17, 2).unwrap();
+        let raw = FilmSums::Float { sums: sums.clone(), squares: squares.clone() };
+        let film = Film::from_raw(3, 2, raw, 0, 17, 2).unwrap();
         save(&path, &recorded, &film).unwrap();
         let (back, film_back) = load(&path).unwrap();
         assert_eq!(back, recorded);

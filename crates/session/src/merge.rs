@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
-use scene::Film;
+use scene::{Film, FilmSums};
 
 use crate::checkpoint::{self, Recorded, header_lines};
 
@@ -21,13 +21,17 @@ pub struct Merged {
 
 /// Loads the slice checkpoints `parts` and merges them. Errors name the files: a checkpoint
 /// that is not a slice, parts of different renders (the differing settings), a slice given
-/// twice, a missing slice (with its iterations), an unfinished slice.
+/// twice, a missing slice (with its iterations), an unfinished slice. Each part is added as it
+/// is loaded (fixed-point sums add in any order), so the memory is one accumulated film and one
+/// loaded part, whatever the number of slices.
 pub fn merge(parts: &[PathBuf]) -> Result<Merged> {
     if parts.is_empty() {
         bail!("vcm merge needs the slice checkpoints (part-*.ckpt) of one render");
     }
-    let mut slices: BTreeMap<u32, (PathBuf, Film)> = BTreeMap::new();
+    let mut slices: BTreeMap<u32, PathBuf> = BTreeMap::new();
     let mut common: Option<(PathBuf, Recorded)> = None;
+    let mut total: Option<FilmSums> = None;
+    let mut rejected = 0;
     for path in parts {
         let (recorded, film) = checkpoint::load(path)?;
         let Some(slice) = recorded.slice else {
@@ -61,10 +65,17 @@ pub fn merge(parts: &[PathBuf]) -> Result<Merged> {
                 }
             }
         }
-        if let Some((other, _)) = slices.get(&slice.index) {
+        if let Some(other) = slices.get(&slice.index) {
             bail!("slice {} is given twice: '{}' and '{}'", slice.name(), other.display(), path.display());
         }
-        slices.insert(slice.index, (path.clone(), film));
+        slices.insert(slice.index, path.clone());
+        rejected += film.rejected_samples();
+        match &mut total {
+            None => total = Some(film.into_raw_sums()),
+            Some(sums) => {
+                sums.add(film.raw_sums()).map_err(|e| anyhow::anyhow!("cannot merge '{}': {e}", path.display()))?
+            }
+        }
     }
     let (_, mut recorded) = common.expect("at least one part");
     let slice = recorded.slice.expect("checked above");
@@ -78,11 +89,11 @@ pub fn merge(parts: &[PathBuf]) -> Result<Merged> {
     if !missing.is_empty() {
         bail!("slices missing: {} (the merge needs all {} slices)", missing.join(", "), slice.count);
     }
-    let mut films = slices.into_values();
-    let (_, mut film) = films.next().expect("slice 0");
-    for (path, part) in films {
-        film.merge(&part).map_err(|e| anyhow::anyhow!("cannot merge '{}': {e}", path.display()))?;
-    }
+    // Every slice is present and complete, so the parts tile 0..n.
+    let (width, height) = recorded.resolution;
+    let sums = total.expect("at least one part");
+    let film = Film::from_raw(width, height, sums, 0, slice.iterations, rejected)
+        .ok_or_else(|| anyhow::anyhow!("internal error: merged sums of another size than {width}x{height}"))?;
     recorded.slice = None;
     Ok(Merged { recorded, film })
 }

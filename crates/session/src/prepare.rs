@@ -116,7 +116,7 @@ impl Prepared {
             None => None,
         };
         if let Some(spec) = request.slice {
-            let name = format!("{}/{}", spec.index, spec.count);
+            let name = spec.name();
             if request.summation == Some(Summation::Float) {
                 bail!("--slice {name} needs --sums fixed (slices are merged exactly), not --sums float");
             }

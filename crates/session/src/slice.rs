@@ -27,6 +27,11 @@ pub struct SliceSpec {
 }
 
 impl SliceSpec {
+    /// `K/N` as the command line spells it.
+    pub fn name(&self) -> String {
+        format!("{}/{}", self.index, self.count)
+    }
+
     /// Parses `K/N` with 0 ≤ K < N.
     pub fn parse(text: &str) -> Result<Self> {
         let parsed = text.split_once('/').and_then(|(k, n)| Some((k.trim().parse().ok()?, n.trim().parse().ok()?)));
@@ -64,7 +69,7 @@ impl Slice {
 
     /// `K/N` as the command line spells it.
     pub fn name(&self) -> String {
-        format!("{}/{}", self.index, self.count)
+        SliceSpec { index: self.index, count: self.count }.name()
     }
 }
 
