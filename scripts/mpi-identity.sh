@@ -127,7 +127,7 @@ result $? "a missing slice is named (exit code $code)" "$out/missing.log"
 printf '<scene version="3.0.0">\n<shape type="nonsense"/>\n' >"$out/bad.xml"
 timeout 120 "${mpirun_[@]}" -np 2 "$mpi" render --scene "$out/bad.xml" --quiet -o "$out/bad.exr" >"$out/bad.log" 2>&1
 code=$?
-[ "$code" -ne 0 ] && [ "$code" -ne 124 ] && grep -q "^error: " "$out/bad.log" && [ ! -f "$out/bad.exr" ]
+[ "$code" -ne 0 ] && [ "$code" -ne 124 ] && grep -q "error: .*bad.xml" "$out/bad.log" && [ ! -f "$out/bad.exr" ]
 result $? "a bad scene ends every rank (exit code $code)" "$out/bad.log"
 
 if [ "$failed" -eq 0 ]; then status=ok; else status=FAILED; fi

@@ -82,8 +82,8 @@ impl session::Observer for RankObserver {
     }
 }
 
-/// Runs `request` on every rank of `mpirun`; rank 0 prints the summary. An error is returned
-/// on rank 0 (printed by `main`); the other ranks exit with code 2 without printing it.
+/// Runs `request` on every rank of `mpirun`; rank 0 prints the summary. An error ends every
+/// rank with exit code 2, printed by rank 0 alone, before MPI is finalised.
 pub fn render(request: &session::Request, stop: &'static AtomicBool, quiet: bool) -> Result<()> {
     let (universe, _) = mpi::initialize_with_threading(Threading::Funneled)
         .ok_or_else(|| anyhow!("cannot initialise MPI (was it initialised already?)"))?;
@@ -92,15 +92,21 @@ pub fn render(request: &session::Request, stop: &'static AtomicBool, quiet: bool
     let mut observer = RankObserver { root, quiet };
     let request = session::Request { progress: request.progress && root, ..request.clone() };
     let outcome = session::render_on(&request, Some(stop), &mut observer, Some(&world));
+    // An error is printed before MPI_Finalize (collective): a rank that exits with code 2 makes
+    // mpirun end the job, and it can only get there after rank 0 has written the message.
+    if let (Err(error), true) = (&outcome, root) {
+        eprintln!("error: {error:#}");
+        let _ = std::io::Write::flush(&mut std::io::stderr());
+    }
     drop(world);
     drop(universe);
     match outcome {
-        Ok(outcome) if root => {
-            eprintln!("{}", outcome.summary);
+        Ok(outcome) => {
+            if root {
+                eprintln!("{}", outcome.summary);
+            }
             Ok(())
         }
-        Ok(_) => Ok(()),
-        Err(error) if root => Err(error),
         Err(_) => std::process::exit(2),
     }
 }
