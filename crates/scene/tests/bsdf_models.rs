@@ -596,6 +596,11 @@ fn smooth_models_have_the_right_delta_weights() {
             assert_eq!(s.lobe, LobeKind::SpecularTransmission);
             assert!((s.direction + fixed).length() < 1e-5, "straight through");
             assert!((weight(&s).r - 1.0).abs() < 1e-4);
+            // Its null transmission (what volumetric shadow rays multiply by) is 1 − R'; other
+            // materials have none.
+            let null = b.null_transmission().expect("a thin dielectric is a null interface");
+            assert!((null.g - (1.0 - expected)).abs() < 1e-5, "1 − R' {} vs {}", null.g, 1.0 - expected);
+            assert!(Bsdf::new(&m, &point, fixed, mode).unwrap().null_transmission().is_none());
             // Dielectric from inside at 3° (no total reflection): radiance weight (η_in/η_out)².
             let inside = direction_at(n, 180.0 - theta.min(30.0), 0.4);
             let b = Bsdf::new(&dielectric(1.5, 1.0), &point, inside, mode).unwrap();

@@ -95,6 +95,19 @@ impl Bsdf {
         }
     }
 
+    /// The per-channel factor (unitless) by which light passes straight through this surface
+    /// with its direction unchanged, when the material is such a *null* interface besides a
+    /// delta reflection (Mitsuba 3's `Null` component: the thin dielectric, and blends of thin
+    /// dielectrics): `transmittance · (1 − R')` of the fixed direction. `None` for every other
+    /// material. The volumetric path tracer lets shadow rays cross these surfaces with this
+    /// factor, and treats a sampled straight-through transmission of them as no vertex.
+    pub fn null_transmission(&self) -> Option<spectrum::Rgb> {
+        match &self.inner {
+            Inner::Reference(_) => None,
+            Inner::Model(b) => b.null_transmission(),
+        }
+    }
+
     /// True when the BSDF has a specular (delta) lobe with non-zero selection probability.
     pub fn has_specular(&self) -> bool {
         match &self.inner {

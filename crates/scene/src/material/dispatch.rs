@@ -73,6 +73,14 @@ pub(super) trait LeafModel {
     fn dispersive(&self) -> bool {
         false
     }
+
+    /// The model's *null* transmission for the local direction `w` (Mitsuba 3's `Null` BSDF
+    /// component): the per-channel factor by which light passes straight through, unchanged in
+    /// direction, when that pass-through is all the model does besides delta reflection; `None`
+    /// for every other model. Volumetric shadow rays cross such surfaces with this factor.
+    fn null_transmission(&self, _w: Vec3) -> Option<Rgb> {
+        None
+    }
 }
 
 /// A leaf scattering model (see [`LeafModel`]).
@@ -273,5 +281,11 @@ impl Model {
     #[inline]
     pub(super) fn dispersive(&self) -> bool {
         each_model!(self, m => m.dispersive())
+    }
+
+    /// See [`LeafModel::null_transmission`].
+    #[inline]
+    pub(super) fn null_transmission(&self, w: Vec3) -> Option<Rgb> {
+        each_model!(self, m => m.null_transmission(w))
     }
 }

@@ -270,6 +270,17 @@ impl ModelBsdf {
     /// the one it sampled about (the unmirrored one when the fixed direction can scatter
     /// about it), so the forward pdf there, and the reverse pdf in radiance mode, are zero for
     /// directions that would pick the other normal.
+    /// The null transmission of the whole mixture for its fixed direction: the blend-weighted
+    /// sum of its components' ([`super::dispatch::LeafModel::null_transmission`]), when every
+    /// component has one; `None` otherwise.
+    pub(super) fn null_transmission(&self) -> Option<Rgb> {
+        let mut sum = Rgb::BLACK;
+        for c in &self.components[..self.count] {
+            sum += c.model.null_transmission(c.orient(self.local_fixed))? * c.scale;
+        }
+        Some(sum)
+    }
+
     pub(super) fn evaluate(&self, generated: Vec3) -> Option<BsdfEval> {
         let Some(adapter) = self.adapter else { return self.evaluate_in_frame(generated) };
         match self.mode {

@@ -63,6 +63,10 @@ impl LeafModel for ThinDielectric {
         self.reflectance * r + self.transmittance * (1.0 - r)
     }
 
+    fn null_transmission(&self, w: Vec3) -> Option<Rgb> {
+        Some(self.transmittance * (1.0 - thin_reflectance(w.z, self.eta)))
+    }
+
     fn evaluate(&self, _: Vec3, _: Vec3, _: TransportMode, _: [f32; 2], _: [f32; 2]) -> ModelEval {
         ModelEval::default()
     }
