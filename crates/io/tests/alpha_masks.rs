@@ -194,3 +194,34 @@ fn pbrt_alpha_errors_name_the_line() {
     error_at(pbrt("wrong_type", "Shape \"sphere\" \"rgb alpha\" [0.5 0.5 0.5]"), 3, &["alpha", "float or texture"]);
     error_at(pbrt("two_values", "Shape \"sphere\" \"float alpha\" [0.5 0.5]"), 3, &["alpha", "one value"]);
 }
+
+#[test]
+fn masked_area_emitters_load_from_both_formats_and_emit_their_opaque_fraction() {
+    // pbrt-v4: a diffuse area light on a 2 × 2 quad of alpha 0.25; Mitsuba 3: an area emitter
+    // on a rectangle (also 2 × 2) inside a mask of opacity 0.25. Both emit a quarter of the
+    // unmasked flux π · L · A = π · 2 · 4 (the tabulated selection power of a constant mask is
+    // exact).
+    let pbrt_desc = pbrt(
+        "pbrt_masked_emitter",
+        "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\n\
+         Shape \"trianglemesh\" \"point3 P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0] \"integer indices\" [0 1 2 0 2 3] \
+         \"float alpha\" 0.25\nAttributeEnd\n",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let mitsuba_desc = mitsuba(
+        "mitsuba_masked_emitter",
+        &format!(
+            r#"<shape type="rectangle"><bsdf type="mask"><float name="opacity" value="0.25"/>{DIFFUSE}</bsdf>
+<emitter type="area"><rgb name="radiance" value="2"/></emitter></shape>"#
+        ),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    for (what, desc) in [("pbrt", pbrt_desc), ("mitsuba", mitsuba_desc)] {
+        let scene = scene::Scene::from_description(&desc, None).unwrap_or_else(|e| panic!("{what}: {e}")).0;
+        let sphere = scene.bounding_sphere;
+        let power: f32 = scene.lights.iter().map(|l| l.power(&sphere)).sum();
+        let expected = 0.25 * std::f32::consts::PI * 2.0 * 4.0;
+        assert!((power - expected).abs() < 1e-4 * expected, "{what}: power {power}, expected {expected}");
+        assert!(scene.lights.iter().all(|l| matches!(l, scene::Light::TexturedTriangle(_))), "{what}");
+    }
+}

@@ -642,6 +642,67 @@ fn projection_light_follows_pbrt_v4() {
 }
 
 #[test]
+fn goniometric_light_follows_pbrt_v4() {
+    let dir = scratch_dir("goniometric");
+    // A 4×4 image whose texel (x, y) has channel mean (1.5 + x + 4·y)/3 (row 0 at the top).
+    let image = io::Image::from_fn(4, 4, |x, y| [(1 + x + 4 * y) as f32, 0.5, 0.0]);
+    io::write_image(&dir.join("gonio.pfm"), &image, &io::WriteOptions::default()).unwrap();
+    let scene = |extra: &str| {
+        fs::write(
+            dir.join("scene.pbrt"),
+            format!(
+                "{HEADER}AttributeBegin\nTranslate 0 1 0\nRotate 90 0 1 0\n\
+                 LightSource \"goniometric\" \"string filename\" \"gonio.pfm\" {extra}\nAttributeEnd\n"
+            ),
+        )
+        .unwrap();
+        io::pbrt::load(&dir.join("scene.pbrt"))
+    };
+    let d = scene("\"rgb I\" [1 0.5 0.25] \"float scale\" 2").unwrap();
+    let light = scene::Light::from_desc(&d.lights[0]).unwrap();
+    let sphere = scene::BoundingSphere { center: Vec3::ZERO, radius: 10.0 };
+    // Light space: x is world −z, y world +y, z world +x (Rotate 90 about y). pbrt-v4 swaps the
+    // light's y and z: the map's (x, y, z) is light (x, z, y) = world (−z, +x, +y). The map's
+    // centre (+z) is world +y, the middle of its right edge (+x) world −z, of its far edge
+    // (+y, v = 1) world +x, its corners (−z) world −y.
+    let map_to_world = |m: Vec3| Vec3::new(m.y, m.z, -m.x).normalize();
+    let cases = [
+        (Vec3::new(0.01, 0.01, 1.0), (2, 2)),
+        (Vec3::new(-0.01, -0.01, 1.0), (1, 1)),
+        (Vec3::new(1.0, 0.01, 0.0), (3, 2)),
+        (Vec3::new(0.01, 1.0, 0.0), (2, 3)),
+        (Vec3::new(0.01, -0.01, -1.0), (3, 0)),
+    ];
+    for (m, (x, y)) in cases {
+        let distance = 3.0;
+        let receiver = Vec3::new(0.0, 1.0, 0.0) + map_to_world(m) * distance;
+        let sample = light.sample_direct(receiver, [0.5, 0.5], &sphere).unwrap();
+        let mean = (1.5 + (x + 4 * y) as f32) / 3.0;
+        let expected = Rgb::new(2.0, 1.0, 0.5) * mean;
+        assert!((sample.radiance.r - expected.r).abs() < 1e-4 * expected.r, "{m}, texel ({x}, {y}): {sample:?}");
+        assert!((sample.radiance.b - expected.b).abs() < 1e-4 * expected.b, "{m}: {sample:?}");
+        assert!((sample.direct_pdf.0 - distance * distance).abs() < 1e-3);
+    }
+    // "power": 4π · mean(image) becomes 10 W (the white I has luminance 1).
+    let d = scene("\"float power\" 10").unwrap();
+    let power = scene::Light::from_desc(&d.lights[0]).unwrap().power(&sphere);
+    assert!((power - 10.0).abs() < 1e-3 * 10.0, "power {power}");
+    // A non-square image and a missing filename are errors with file:line.
+    let wide = io::Image::from_fn(4, 2, |_, _| [1.0, 1.0, 1.0]);
+    io::write_image(&dir.join("wide.pfm"), &wide, &io::WriteOptions::default()).unwrap();
+    fs::write(
+        dir.join("scene.pbrt"),
+        format!("{HEADER}LightSource \"goniometric\" \"string filename\" \"wide.pfm\"\n"),
+    )
+    .unwrap();
+    let e = io::pbrt::load(&dir.join("scene.pbrt")).unwrap_err().to_string();
+    assert!(e.contains("scene.pbrt:3:") && e.contains("4×2") && e.contains("square"), "{e}");
+    fs::write(dir.join("scene.pbrt"), format!("{HEADER}LightSource \"goniometric\"\n")).unwrap();
+    let e = io::pbrt::load(&dir.join("scene.pbrt")).unwrap_err().to_string();
+    assert!(e.contains("scene.pbrt:3:") && e.contains("\"filename\" is required"), "{e}");
+}
+
+#[test]
 fn point_spot_and_distant_lights() {
     let text = format!(
         "{HEADER}Translate 1 0 0\n\

@@ -211,7 +211,11 @@ impl Parts {
                 return Err(format!("shape '{}': the emission texture has non-finite values", shape.name));
             }
         }
-        let alpha = self.alpha_mask(shape)?;
+        let alpha = self.alpha_mask(shape, spectrum.is_some())?;
+        // The mask an emitting mesh samples its points by (masked emitters).
+        let emission_mask =
+            alpha.filter(|_| emission.is_some()).map(|i| Arc::new(self.alpha_masks[i as usize].clone()));
+        let constant_emission = emission.map(|radiance| Arc::new(Texture::Constant(radiance)));
         let first_primitive = self.primitives.len();
         let first_light = self.lights.len() as u32;
         let attribute_name = self.material_attributes.get(shape.material as usize).and_then(Option::as_deref);
@@ -227,24 +231,32 @@ impl Parts {
                         self.report.degenerate_triangles += 1;
                         continue;
                     };
-                    let light = match texture {
-                        // A textured triangle that is black everywhere does not emit.
-                        Some(texture) => {
-                            let uvs = match &extra {
-                                Some(SurfaceAttributes::Triangle { uvs: Some(uvs), .. }) => *uvs,
-                                _ => [math::Vec2::ZERO; 3],
-                            };
-                            TexturedTriangleLight::new(triangle, uvs, texture.clone()).map(|light| {
+                    let uvs = match &extra {
+                        Some(SurfaceAttributes::Triangle { uvs: Some(uvs), .. }) => *uvs,
+                        _ => [math::Vec2::ZERO; 3],
+                    };
+                    let light = match (texture.or(constant_emission.as_ref()), &emission_mask) {
+                        // A masked triangle emits where its mask is on (nothing if it is off everywhere).
+                        (Some(texture), Some(mask)) => {
+                            TexturedTriangleLight::masked(triangle, uvs, texture.clone(), mask.clone()).map(|light| {
                                 self.lights.push(Light::TexturedTriangle(light));
                                 self.light_spectra.push(None);
                                 self.lights.len() as u32 - 1
                             })
                         }
-                        None => emission.map(|radiance| {
-                            self.lights.push(Light::Area(AreaLight::new(triangle, radiance)));
-                            self.light_spectra.push(spectrum.clone());
-                            self.lights.len() as u32 - 1
-                        }),
+                        _ => match texture {
+                            // A textured triangle that is black everywhere does not emit.
+                            Some(texture) => TexturedTriangleLight::new(triangle, uvs, texture.clone()).map(|light| {
+                                self.lights.push(Light::TexturedTriangle(light));
+                                self.light_spectra.push(None);
+                                self.lights.len() as u32 - 1
+                            }),
+                            None => emission.map(|radiance| {
+                                self.lights.push(Light::Area(AreaLight::new(triangle, radiance)));
+                                self.light_spectra.push(spectrum.clone());
+                                self.lights.len() as u32 - 1
+                            }),
+                        },
                     };
                     let mut primitive = Primitive::new(Shape::Triangle(triangle), shape.material, light);
                     if let Some(extra) = extra {
@@ -312,8 +324,10 @@ impl Parts {
 
     /// The index of the alpha mask of `shape` in `alpha_masks` (added there), or `None` when
     /// the shape has none or its opacity is 1 everywhere. Errors when the texture has
-    /// non-finite values, or the shape emits (light sampling would pick transparent points).
-    fn alpha_mask(&mut self, shape: &ShapeDesc) -> Result<Option<u32>, String> {
+    /// non-finite values, or the shape emits (with emission `spectrum`, when `true`) and is not
+    /// a triangle mesh or has an emission spectrum: masked emitters are masked textured
+    /// triangles ([`TexturedTriangleLight::masked`]).
+    fn alpha_mask(&mut self, shape: &ShapeDesc, spectrum: bool) -> Result<Option<u32>, String> {
         let Some(texture) = &shape.alpha else { return Ok(None) };
         let max = texture.max_value();
         if !(max.r.is_finite() && max.g.is_finite() && max.b.is_finite()) {
@@ -324,10 +338,20 @@ impl Parts {
             return Ok(None);
         }
         if shape.emission.is_some_and(|e| !e.is_black()) {
-            return Err(format!(
-                "shape '{}' emits light and has an alpha mask: masked emitters are not supported",
-                shape.name
-            ));
+            if !matches!(shape.geometry, Geometry::Mesh(_)) {
+                return Err(format!(
+                    "shape '{}' emits light and has an alpha mask: masked emitters are supported on \
+                     triangle meshes only",
+                    shape.name
+                ));
+            }
+            if spectrum {
+                return Err(format!(
+                    "shape '{}' emits light and has an alpha mask: a masked emitter cannot have an emission \
+                     spectrum",
+                    shape.name
+                ));
+            }
         }
         self.alpha_masks.push(mask);
         Ok(Some(self.alpha_masks.len() as u32 - 1))
@@ -342,7 +366,9 @@ fn light_spectrum(light: &LightDesc, spectrum: &EmissionSpectrum) -> Result<Ligh
         LightDesc::Spot { texture: Some(_), .. } => {
             return Err("a textured spot light cannot have an emission spectrum".into());
         }
-        LightDesc::Point { intensity, .. } | LightDesc::Spot { intensity, .. } => *intensity,
+        LightDesc::Point { intensity, .. }
+        | LightDesc::Spot { intensity, .. }
+        | LightDesc::Goniometric { intensity, .. } => *intensity,
         LightDesc::Projector { .. } => return Err("a projector cannot have an emission spectrum".into()),
         LightDesc::Directional { irradiance, .. } => *irradiance,
         LightDesc::Constant { radiance } => *radiance,

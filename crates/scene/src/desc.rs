@@ -239,6 +239,20 @@ pub enum LightDesc {
         /// Image width / height.
         aspect: f32,
     },
+    /// pbrt-v4's goniometric light: a point at `position` whose intensity along the unit world
+    /// direction `d` is `intensity · m(s)`, with `m` the mean of the R, G and B channels of the
+    /// square `image` at its nearest texel to `s`, the equal-area octahedral square point of the
+    /// local direction `(d·frame[0], d·frame[1], d·frame[2])` (the image's centre is `frame[2]`).
+    Goniometric {
+        /// Position.
+        position: Vec3,
+        /// World images of the map's local axes; orthonormal.
+        frame: [Vec3; 3],
+        /// The intensity image (unitless; square, row 0 at the top, i.e. `s.y = 0`).
+        image: Arc<TextureImage>,
+        /// Factor applied to the image's values (W/sr per channel).
+        intensity: Rgb,
+    },
     /// Directional light travelling along `direction`.
     Directional {
         /// Unit direction of travel.

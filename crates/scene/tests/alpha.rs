@@ -2,8 +2,8 @@
 //! (x < 0) and 1 on its right half, as a world shape and as an instanced object, in front of an
 //! opaque backstop. Rays through the left half pass to the backstop (closest hit) and are not
 //! occluded by the quad (any hit); rays through the right half stop at the quad. A constant
-//! fractional opacity keeps a fraction α of the hits; masked emitters and non-finite opacities
-//! are build errors.
+//! fractional opacity keeps a fraction α of the hits; masked emitting spheres and non-finite
+//! opacities are build errors (masked emitting meshes: `tests/masked_emitter.rs`).
 
 use glam::Affine3A;
 use math::{Ray, Vec2, Vec3};
@@ -147,7 +147,8 @@ fn a_fractional_opacity_keeps_that_fraction_of_the_hits() {
 
 #[test]
 fn masked_emitters_and_bad_opacities_are_errors() {
-    let mut emitter = shape("lamp", quad(0.0), 0, Some(half_mask()));
+    let ball = Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false };
+    let mut emitter = shape("lamp", ball, 0, Some(half_mask()));
     emitter.emission = Some(Rgb::WHITE);
     let error = Scene::from_description(&description(vec![emitter], vec![]), None).unwrap_err();
     assert!(error.contains("lamp") && error.contains("alpha"), "{error}");

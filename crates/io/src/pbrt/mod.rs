@@ -56,6 +56,7 @@ mod alpha;
 mod coated;
 pub mod color;
 pub mod envmap;
+mod goniometric;
 mod instancing;
 mod medium;
 mod parser;
@@ -1659,15 +1660,21 @@ impl Builder {
                 }
             }
             "projection" => self.projection_light(file, d, scale)?,
-            other @ "goniometric" => {
-                return Err(err(file, d.arg_pos[0], format!("light \"{other}\" is not supported")));
+            "goniometric" => {
+                let intensity = self.light_emission(p, "I").map(|(c, s)| {
+                    spectrum = s.map(|s| (c, s));
+                    c
+                })? * scale;
+                goniometric::goniometric_light(file, d, &ctm, intensity)?
             }
             other => return Err(err(file, d.arg_pos[0], format!("unknown light type \"{other}\""))),
         };
         if let Some((unscaled, s)) = spectrum {
             // The file's scale, power and illuminance factors multiply every channel alike.
             let value = match &light {
-                LightDesc::Point { intensity, .. } | LightDesc::Spot { intensity, .. } => *intensity,
+                LightDesc::Point { intensity, .. }
+                | LightDesc::Spot { intensity, .. }
+                | LightDesc::Goniometric { intensity, .. } => *intensity,
                 LightDesc::Directional { irradiance, .. } => *irradiance,
                 LightDesc::Constant { radiance } => *radiance,
                 LightDesc::EnvMap { .. } | LightDesc::Projector { .. } => Rgb::BLACK,

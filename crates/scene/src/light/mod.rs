@@ -29,6 +29,8 @@ mod area;
 mod background;
 mod directional;
 mod envmap;
+pub mod equal_area;
+mod goniometric;
 mod point;
 mod projector;
 mod spot;
@@ -44,6 +46,7 @@ pub use area::{AreaLight, AreaShape};
 pub use background::BackgroundLight;
 pub use directional::DirectionalLight;
 pub use envmap::EnvMapLight;
+pub use goniometric::GoniometricLight;
 pub use point::PointLight;
 pub use projector::ProjectorLight;
 pub use spot::SpotLight;
@@ -71,6 +74,8 @@ pub enum Light {
     Spot(SpotLight),
     /// Projector: a point projecting an image.
     Projector(ProjectorLight),
+    /// Goniometric light: a point with an intensity image over the sphere.
+    Goniometric(GoniometricLight),
     /// Directional light.
     Directional(DirectionalLight),
     /// Constant environment.
@@ -156,6 +161,9 @@ impl Light {
                     *aspect,
                 )?))
             }
+            LightDesc::Goniometric { position, frame, image, intensity } => {
+                Ok(Light::Goniometric(GoniometricLight::new(*position, *frame, image, *intensity)?))
+            }
             LightDesc::Directional { direction, irradiance } => {
                 let direction = check_direction("directional light direction", *direction)?;
                 check_rgb("directional light irradiance", *irradiance)?;
@@ -174,14 +182,22 @@ impl Light {
     /// True for lights whose position (point, spot) or direction (directional) is a delta
     /// distribution: they cannot be hit by rays.
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Point(_) | Light::Spot(_) | Light::Projector(_) | Light::Directional(_))
+        matches!(
+            self,
+            Light::Point(_) | Light::Spot(_) | Light::Projector(_) | Light::Goniometric(_) | Light::Directional(_)
+        )
     }
 
     /// True for lights at finite distance (area, point, spot, projector).
     pub fn is_finite(&self) -> bool {
         matches!(
             self,
-            Light::Area(_) | Light::TexturedTriangle(_) | Light::Point(_) | Light::Spot(_) | Light::Projector(_)
+            Light::Area(_)
+                | Light::TexturedTriangle(_)
+                | Light::Point(_)
+                | Light::Spot(_)
+                | Light::Projector(_)
+                | Light::Goniometric(_)
         )
     }
 
@@ -194,6 +210,7 @@ impl Light {
     /// power-proportional light selection:
     /// * area: `π·A·L`; point: `4π·I`; spot: `I·∫f dω` with the exact integral of the falloff,
     ///   `2π·I·(1 − (sin c − sin b)/(c − b))`;
+    /// * goniometric: `4π·I·mean(m)` (exact: the map preserves area);
     /// * textured triangle, textured spot, projector: the same integrals evaluated numerically
     ///   over the texture (see each light); they only steer light selection, which stays
     ///   unbiased for any positive power;
@@ -209,6 +226,7 @@ impl Light {
             Light::TexturedTriangle(light) => light.power_luminance(),
             Light::Spot(light) => light.power_luminance(),
             Light::Projector(light) => light.power_luminance(),
+            Light::Goniometric(light) => light.power_luminance(),
             Light::Directional(light) => disc_area * light.irradiance.luminance(),
             Light::Background(light) => disc_area * 4.0 * PI * light.radiance.luminance(),
             Light::EnvMap(light) => disc_area * light.luminance_integral(),
@@ -224,6 +242,7 @@ impl Light {
             Light::TexturedTriangle(light) => light.sample_direct(receiver, u),
             Light::Spot(light) => light.sample_direct(receiver),
             Light::Projector(light) => light.sample_direct(receiver),
+            Light::Goniometric(light) => light.sample_direct(receiver),
             Light::Directional(light) => light.sample_direct(sphere),
             Light::Background(light) => light.sample_direct(u, sphere),
             Light::EnvMap(light) => light.sample_direct(u, sphere),
@@ -244,6 +263,7 @@ impl Light {
             Light::TexturedTriangle(light) => light.sample_emission(u_position, u_direction),
             Light::Spot(light) => light.sample_emission(u_direction),
             Light::Projector(light) => light.sample_emission(u_direction),
+            Light::Goniometric(light) => light.sample_emission(u_direction),
             Light::Directional(light) => light.sample_emission(u_position, sphere),
             Light::Background(light) => light.sample_emission(u_position, u_direction, sphere),
             Light::EnvMap(light) => light.sample_emission(u_position, u_direction, sphere),
@@ -267,7 +287,9 @@ impl Light {
         match self {
             Light::Area(light) => light.radiance_on_hit(ray_direction, normal),
             Light::TexturedTriangle(light) => light.radiance_on_hit(ray_direction, position),
-            Light::Point(_) | Light::Spot(_) | Light::Projector(_) | Light::Directional(_) => None,
+            Light::Point(_) | Light::Spot(_) | Light::Projector(_) | Light::Goniometric(_) | Light::Directional(_) => {
+                None
+            }
             Light::Background(light) => light.radiance_on_hit(sphere),
             Light::EnvMap(light) => light.radiance_on_hit(ray_direction, sphere),
         }

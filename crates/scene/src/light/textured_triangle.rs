@@ -8,6 +8,15 @@
 //! therefore `p(s)/area` per unit area, for direct and emission sampling alike; emission adds a
 //! cosine-distributed direction, so the emission pdf is `p(s)/area · cos/π` (area × solid
 //! angle). A hit point is mapped back by its barycentrics and [`warp::uniform_triangle_inverse`].
+//!
+//! Masked emitters (an emitting shape with an alpha mask, [`TexturedTriangleLight::masked`]):
+//! a masked-out point neither emits nor blocks. A ray sees a point of opacity α with
+//! probability α (the stochastic alpha test of [`crate::alpha`]), so the radiance it sees there
+//! is the texture's `L` with probability α: `α·L` in expectation. The sampled density follows
+//! the luminance of `α·L`, and sampled points (next-event estimation, light sub-paths) carry
+//! `α·L`; a hit carries `L` (the test has already kept it with probability α). Both report the
+//! same area density, so MIS weights stay consistent, and a point of opacity 0 is never
+//! produced with a non-zero weight. The power is `π·∫α·L dA`.
 
 use std::sync::Arc;
 
@@ -15,6 +24,7 @@ use math::{Distribution2D, Frame, PI, PdfA, PdfW, Vec2, Vec3, warp};
 use spectrum::Rgb;
 
 use super::{DirectSample, EmissionSample, HitRadiance, tabulated};
+use crate::alpha::AlphaMask;
 use crate::shape::Triangle;
 use crate::texture::Texture;
 
@@ -31,6 +41,8 @@ pub struct TexturedTriangleLight {
     /// Texture coordinates at the three vertices.
     pub uvs: [Vec2; 3],
     texture: Arc<Texture>,
+    /// The opacity mask, for masked emitters.
+    mask: Option<Arc<AlphaMask>>,
     inv_area: f32,
     distribution: Arc<Distribution2D>,
     /// Luminance of the emitted flux `π·∫L dA` (W).
@@ -41,8 +53,20 @@ impl TexturedTriangleLight {
     /// The emitter on `triangle` (vertex uvs `uvs`) with radiance `texture`. `None` when the
     /// texture is black (or not finite) everywhere it is tabulated: the triangle emits nothing.
     pub fn new(triangle: Triangle, uvs: [Vec2; 3], texture: Arc<Texture>) -> Option<Self> {
+        Self::build(triangle, uvs, texture, None)
+    }
+
+    /// A masked emitter: the triangle emits `texture` where the opacity `mask` (read at the
+    /// same uvs) is on, `α·L` in expectation (module docs), and its points are sampled in
+    /// proportion to the luminance of `α·L`. `None` when `α·L` is black (or not finite)
+    /// everywhere it is tabulated.
+    pub fn masked(triangle: Triangle, uvs: [Vec2; 3], texture: Arc<Texture>, mask: Arc<AlphaMask>) -> Option<Self> {
+        Self::build(triangle, uvs, texture, Some(mask))
+    }
+
+    fn build(triangle: Triangle, uvs: [Vec2; 3], texture: Arc<Texture>, mask: Option<Arc<AlphaMask>>) -> Option<Self> {
         let area = triangle.area();
-        let cells = match texture.resolution() {
+        let cells_of = |texture: &Texture| match texture.resolution() {
             Some((w, h)) => {
                 // About one cell per texel covered, up to MAX_CELLS per axis.
                 let uv_area = 0.5 * (uvs[1] - uvs[0]).perp_dot(uvs[2] - uvs[0]).abs();
@@ -52,7 +76,12 @@ impl TexturedTriangleLight {
             None if texture.as_constant().is_some() => 1,
             None => DEFAULT_CELLS,
         };
-        let radiance_at_square = |s: Vec2| texture.eval(uv_at(&uvs, warp::uniform_triangle([s.x, s.y]))).luminance();
+        let cells = cells_of(&texture).max(mask.as_ref().map_or(1, |m| cells_of(&m.texture)));
+        let opacity = |uv: Vec2| mask.as_ref().map_or(1.0, |m| m.opacity(uv));
+        let radiance_at_square = |s: Vec2| {
+            let uv = uv_at(&uvs, warp::uniform_triangle([s.x, s.y]));
+            texture.eval(uv).luminance() * opacity(uv)
+        };
         let (distribution, mean) = tabulated::tabulate(cells, cells, radiance_at_square)?;
         Some(Self {
             triangle,
@@ -61,6 +90,7 @@ impl TexturedTriangleLight {
             distribution: Arc::new(distribution),
             power: PI * area * mean,
             texture,
+            mask,
         })
     }
 
@@ -74,19 +104,21 @@ impl TexturedTriangleLight {
         1.0 / self.inv_area
     }
 
-    /// Radiance and area density at the point with barycentrics `b` (`b.x = b1`, `b.y = b2`).
+    /// Radiance (the texture's, without the mask) and area density at the point with
+    /// barycentrics `b` (`b.x = b1`, `b.y = b2`).
     fn at(&self, b: Vec2) -> (Rgb, f32) {
         let s = warp::uniform_triangle_inverse(b).map(|v| v.clamp(0.0, 1.0));
         let radiance = self.texture.eval(uv_at(&self.uvs, b));
         (radiance, self.distribution.pdf(Vec2::new(s[0], s[1])) * self.inv_area)
     }
 
-    /// A point, its radiance and its area density.
+    /// A point, its expected radiance (`α·L`, module docs) and its area density.
     fn sample_point(&self, u: [f32; 2]) -> (Vec3, Rgb, f32) {
         let (s, _) = self.distribution.sample(u);
         let b = warp::uniform_triangle([s.x, s.y]);
         let (radiance, pdf) = self.at(b);
-        (self.triangle.point(b.x, b.y), radiance, pdf)
+        let opacity = self.mask.as_ref().map_or(1.0, |m| m.opacity(uv_at(&self.uvs, b)));
+        (self.triangle.point(b.x, b.y), radiance * opacity, pdf)
     }
 
     /// Area density (per square scene unit) with which the point `position` of the triangle
@@ -134,7 +166,8 @@ impl TexturedTriangleLight {
     }
 
     /// The radiance seen along `ray_direction` at `position` on the triangle, `None` from
-    /// behind.
+    /// behind. On a masked emitter this is `L`: the caller's ray has already passed the alpha
+    /// test at `position`.
     pub(super) fn radiance_on_hit(&self, ray_direction: Vec3, position: Vec3) -> Option<HitRadiance> {
         let cos_at_light = self.triangle.normal.dot(-ray_direction);
         if cos_at_light <= 0.0 {
