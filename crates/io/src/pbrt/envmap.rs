@@ -6,50 +6,12 @@
 
 use std::f64::consts::PI;
 
+use math::Vec3;
 use scene::desc::TextureImage;
+use scene::light::equal_area;
 use spectrum::Rgb;
 
 use crate::pbrt::transform::V3;
-
-/// Clarberg's equal-area map from the unit square to the unit sphere (pbrt-v4's
-/// `EqualAreaSquareToSphere`): uniform density on the square becomes uniform density on the
-/// sphere.
-pub fn square_to_sphere(p: [f64; 2]) -> V3 {
-    let u = 2.0 * p[0] - 1.0;
-    let v = 2.0 * p[1] - 1.0;
-    let (up, vp) = (u.abs(), v.abs());
-    let signed_distance = 1.0 - (up + vp);
-    let d = signed_distance.abs();
-    let r = 1.0 - d;
-    let phi = if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 } * PI / 4.0;
-    let z = (1.0 - r * r).copysign(signed_distance);
-    let cos_phi = phi.cos().copysign(u);
-    let sin_phi = phi.sin().copysign(v);
-    let s = r * (2.0 - r * r).max(0.0).sqrt();
-    [cos_phi * s, sin_phi * s, z]
-}
-
-/// The inverse of [`square_to_sphere`] for a unit direction.
-pub fn sphere_to_square(d: V3) -> [f64; 2] {
-    let (x, y, z) = (d[0].abs(), d[1].abs(), d[2].abs());
-    let r = (1.0 - z).max(0.0).sqrt();
-    let a = x.max(y);
-    let b = if a == 0.0 { 0.0 } else { x.min(y) / a };
-    let mut phi = b.atan() * 2.0 / PI;
-    if x < y {
-        phi = 1.0 - phi;
-    }
-    let mut v = phi * r;
-    let mut u = r - v;
-    if d[2] < 0.0 {
-        std::mem::swap(&mut u, &mut v);
-        u = 1.0 - u;
-        v = 1.0 - v;
-    }
-    let u = u.copysign(d[0]);
-    let v = v.copysign(d[1]);
-    [(u + 1.0) * 0.5, (v + 1.0) * 0.5]
-}
 
 /// Bilinear lookup in a row-major image at continuous coordinates `st` ∈ [0,1]², texel centres
 /// at half-integers, clamped at the edges.
@@ -84,7 +46,9 @@ pub fn octahedral_to_latlong(side: usize, pixels: &[[f32; 3]]) -> TextureImage {
     let mut out = Vec::with_capacity(width * height);
     for j in 0..height {
         for i in 0..width {
-            let st = sphere_to_square(latlong_direction(i, j, width, height));
+            let d = latlong_direction(i, j, width, height);
+            let st = equal_area::sphere_to_square(Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32).normalize());
+            let st = [f64::from(st.x), f64::from(st.y)];
             let c = bilinear_clamped(side, side, pixels, st);
             out.push(Rgb::new(c[0] as f32, c[1] as f32, c[2] as f32));
         }

@@ -59,4 +59,24 @@ mod tests {
         }
         assert!(worst < 1e-4, "round trip error {worst}");
     }
+
+    #[test]
+    fn equal_areas_map_to_equal_solid_angles() {
+        // Midpoints of a uniform grid on the square are uniform on the sphere: E[z] = 0 and
+        // E[z²] = E[x²] = 1/3 (midpoint-rule error ~1/n²).
+        let n = 200;
+        let (mut z, mut z2, mut x2) = (0.0f64, 0.0f64, 0.0f64);
+        for i in 0..n {
+            for j in 0..n {
+                let d = square_to_sphere(Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32));
+                z += f64::from(d.z);
+                z2 += f64::from(d.z * d.z);
+                x2 += f64::from(d.x * d.x);
+            }
+        }
+        let m = f64::from(n * n);
+        assert!((z / m).abs() < 1e-3);
+        assert!((z2 / m - 1.0 / 3.0).abs() < 1e-3, "{}", z2 / m);
+        assert!((x2 / m - 1.0 / 3.0).abs() < 1e-3, "{}", x2 / m);
+    }
 }
