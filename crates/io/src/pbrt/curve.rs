@@ -50,13 +50,10 @@ pub(super) fn curve_mesh(p: &ParamSet, pos: Pos) -> Result<MeshData, SceneError>
         return Err(p.error(dpos, format!("curve degree {degree} is not 2 or 3")));
     }
     let degree = degree as usize;
-    match p.string("type")? {
-        None => {}
-        Some((t, tpos)) => {
-            if !matches!(t.as_str(), "flat" | "ribbon" | "cylinder") {
-                return Err(p.error(tpos, format!("curve type \"{t}\" is not \"flat\", \"ribbon\" or \"cylinder\"")));
-            }
-        }
+    if let Some((t, tpos)) = p.string("type")?
+        && !matches!(t.as_str(), "flat" | "ribbon" | "cylinder")
+    {
+        return Err(p.error(tpos, format!("curve type \"{t}\" is not \"flat\", \"ribbon\" or \"cylinder\"")));
     }
     // Ribbon normals: read (and so not reported as unused) but not modelled.
     let _ = p.numbers("N", &["normal3", "normal"], 3)?;

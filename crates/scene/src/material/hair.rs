@@ -268,7 +268,7 @@ impl Hair {
     }
 
     /// `Σ_p A_p` for `w` as the camera-side direction (the fraction not absorbed).
-    fn total_attenuation(&self, w: Vec3) -> Rgb {
+    pub(super) fn total_attenuation(&self, w: Vec3) -> Rgb {
         self.outgoing(w).map_or(Rgb::BLACK, |o| o.attenuation.iter().fold(Rgb::BLACK, |s, &a| s + a))
     }
 }
@@ -287,9 +287,12 @@ impl LeafModel for Hair {
         self.total_attenuation(Vec3::Z).luminance()
     }
 
-    /// `Σ_p A_p(w)`: the exact directional albedo `∫ S dω_i` for `w` as `wo`.
-    fn albedo(&self, w: Vec3) -> Rgb {
-        self.total_attenuation(w)
+    /// `Σ_p A_p` seen head-on (`h = 0`, `θ = 0`), the same for every direction: the engine's
+    /// MIS weights need a continuation probability that does not depend on the direction (see
+    /// `docs/materials.md`, coated materials). The directional albedo `∫ S dω_i` for `wo` is
+    /// `total_attenuation(wo)`.
+    fn albedo(&self, _w: Vec3) -> Rgb {
+        self.total_attenuation(Vec3::Z)
     }
 
     fn evaluate(

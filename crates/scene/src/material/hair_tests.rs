@@ -72,13 +72,13 @@ fn white_furnace_conserves_energy() {
             let what = format!("β_m {beta_m} β_n {beta_n}: {} ± {}", mean[1], se[1]);
             assert!((mean[1] - 1.0).abs() < 4.0 * se[1] + 1e-5, "{what}");
             assert!(se[1] < 0.003 && (1.01 * mean[1] - 1.0).abs() > 4.0 * se[1], "{what}: no power");
-            assert!((hair.albedo(wo) - Rgb::WHITE).max_component().abs() < 1e-5);
+            assert!((hair.total_attenuation(wo) - Rgb::WHITE).max_component().abs() < 1e-5);
         }
     }
     let hair = Hair::new(&params(Rgb::new(0.1, 0.5, 2.0), 0.4, 0.4, 2.0));
     let wo = front(&mut rng);
     let (mean, se) = furnace(&hair, wo, &mut rng);
-    let albedo = hair.albedo(wo).to_array();
+    let albedo = hair.total_attenuation(wo).to_array();
     for c in 0..3 {
         assert!(albedo[c] < 0.999 && (mean[c] - f64::from(albedo[c])).abs() < 4.0 * se[c] + 1e-5, "{c}: {mean:?}");
     }
