@@ -202,6 +202,24 @@ fn mitsuba_hair_loads_and_checks() {
     assert!(e.to_string().contains("beta_n") && e.line == Some(4), "{e}");
 }
 
+/// A hair tube is seen from outside only: a ray from inside passes through its wall (both ray
+/// queries), while the same tube with a diffuse material stops it; from outside both stop it.
+#[test]
+fn hair_tubes_are_transparent_from_inside() {
+    let curve = "Shape \"curve\" \"point3 P\" [0 -3 0 0 -1 0 0 1 0 0 3 0] \"float width\" 0.5\n";
+    for (material, hair) in [("Material \"hair\"\n", true), ("Material \"diffuse\"\n", false)] {
+        let d = pbrt(if hair { "inside_hair" } else { "inside_diffuse" }, &format!("{material}{curve}")).unwrap();
+        let (scene, _) = Scene::from_description(&d, None).unwrap();
+        let inside = math::Ray::new(math::Vec3::ZERO, math::Vec3::X);
+        assert_eq!(scene.intersect(&inside).is_none(), hair, "{material}");
+        assert_eq!(scene.occluded(math::Vec3::ZERO, math::Vec3::X, 10.0), !hair, "{material}");
+        let outside = math::Ray::new(math::Vec3::new(-5.0, 0.0, 0.0), math::Vec3::X);
+        let hit = scene.intersect(&outside).expect("the tube is hit from outside");
+        assert!((hit.distance - 4.75).abs() < 0.01, "{}", hit.distance);
+        assert!(scene.occluded(math::Vec3::new(-5.0, 0.0, 0.0), math::Vec3::X, 10.0));
+    }
+}
+
 /// Per-iteration means (green channel) over the hair's part of the image of `algorithm` on
 /// `description`.
 fn render(description: &SceneDescription, algorithm: &str, iterations: u64) -> MeanVar {

@@ -96,7 +96,8 @@ fn a_wrong_pdf_fails_the_chi_square_test() {
 /// Sampled values and pdfs equal evaluated ones; the sample weight `f cos/pdf` is the
 /// evaluation-based one; pdfs do not depend on the mode and swap with the pair; the value in
 /// importance mode for (b, a) is the radiance value for (a, b) (also with a tilted shading
-/// normal); evaluation is deterministic.
+/// normal); evaluation is deterministic; the continuation probability does not depend on the
+/// fixed direction.
 #[test]
 fn sampled_and_evaluated_agree_and_the_adjoint_is_exact() {
     let mut rng = Rng::for_stream(9, 0, 0);
@@ -104,12 +105,15 @@ fn sampled_and_evaluated_agree_and_the_adjoint_is_exact() {
     for point in [fibre_point(false), fibre_point(true)] {
         for (name, material) in cases() {
             let mut pairs = 0;
+            let mut continuation = None;
             for theta in [10.0f32, 45.0, 80.0] {
                 for mode in MODES {
                     let fixed = direction(&point, theta, 2.0);
                     let bsdf = Bsdf::new(&material, &point, fixed, mode).unwrap();
                     let c = bsdf.continuation_probability();
                     assert!(c > 0.0 && c <= 1.0, "{name}: continuation {c}");
+                    // The same for every fixed direction (VCM's recursive weights need it).
+                    assert_eq!(*continuation.get_or_insert(c), c, "{name}: continuation depends on the direction");
                     for _ in 0..200 {
                         let Some(s) = bsdf.sample(rng.uniform3()) else { continue };
                         let what = format!("{name} at {theta}° ({mode:?})");

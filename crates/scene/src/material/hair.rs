@@ -40,6 +40,7 @@
 use math::{PI, Vec3, sqr};
 use spectrum::Rgb;
 
+use super::description::Material;
 use super::dispatch::LeafModel;
 use super::fresnel::fresnel_dielectric;
 use super::hair_functions::{
@@ -108,6 +109,16 @@ impl HairParameters {
             return Err("hair alpha must be a finite angle in degrees".into());
         }
         Ok(())
+    }
+}
+
+impl Material {
+    /// True for a hair fibre: the curve's tube is seen from outside only. Like Mitsuba's hair
+    /// (a null component on the back side), hits on the inside of the tube are skipped by both
+    /// ray queries, so the path that the TT and TRT lobes send into the fibre continues through
+    /// it: a lobe stands for the whole walk inside, entering and leaving at the hit point.
+    pub fn is_fibre(&self) -> bool {
+        matches!(self, Material::Hair(_))
     }
 }
 
