@@ -48,8 +48,9 @@
 //! - **Media**: homogeneous media, `MediumInterface` and the `interface` material (see
 //!   `medium.rs`); grid media are errors.
 //! - **Unsupported** features are errors naming them (grid media, textures other
-//!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `hair`, `measured`,
-//!   `subsurface`, …); the layered `coateddiffuse` and `coatedconductor` are in `coated.rs`;
+//!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `measured`, `subsurface`, …);
+//!   the layered `coateddiffuse` and `coatedconductor` are in `coated.rs`; `hair` is here and
+//!   `curve` shapes (tessellated into tubes) in `curve.rs`;
 //!   unsupported optional parameters are warnings in [`SceneDescription::warnings`].
 
 mod alpha;
