@@ -161,7 +161,7 @@ fn perpendicular(axis: DVec3) -> DVec3 {
 /// A tube through `samples` (centre, radius, v before the division by `segments`) with rings
 /// perpendicular to `tangents`, the ring frame carried from one ring to the next by the
 /// smallest rotation (parallel transport).
-fn tube(mesh: &mut MeshData, samples: &[(DVec3, f64, f64)], tangents: &[DVec3], segments: usize) {
+pub(crate) fn tube(mesh: &mut MeshData, samples: &[(DVec3, f64, f64)], tangents: &[DVec3], segments: usize) {
     let scale = (0.5 * TAU / SIDES as f64) / (0.5 * TAU / SIDES as f64).sin();
     let base = mesh.positions.len() as u32;
     let mut previous_axis: Option<DVec3> = None;

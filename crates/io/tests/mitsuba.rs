@@ -540,8 +540,8 @@ fn plastics_blend_and_twosided() {
         Material::TwoSided { back: Some(back), .. } => assert!(matches!(*back, Material::Dielectric { .. })),
         m => panic!("{m:?}"),
     }
-    let (e, path) = load_err(&format!("{SENSOR}\n<shape type=\"sphere\">\n<bsdf type=\"hair\"/></shape>"));
-    assert_error(&e, &path, 5, &["unsupported bsdf type 'hair'"]);
+    let (e, path) = load_err(&format!("{SENSOR}\n<shape type=\"sphere\">\n<bsdf type=\"measured\"/></shape>"));
+    assert_error(&e, &path, 5, &["unsupported bsdf type 'measured'"]);
 }
 
 #[test]

@@ -514,8 +514,8 @@ fn dielectrics_mix_and_unsupported_materials() {
         }
         other => panic!("{other:?}"),
     }
-    let e = load_err("hair", &format!("{HEADER}Material \"hair\"\n"));
-    assert_eq!(e.rsplit_once("scene.pbrt:").unwrap().1, "3:1: material \"hair\" is not supported");
+    let e = load_err("measured", &format!("{HEADER}Material \"measured\"\n"));
+    assert_eq!(e.rsplit_once("scene.pbrt:").unwrap().1, "3:1: material \"measured\" is not supported");
     // An index-matched boundary (see tests/media.rs).
     let d = load_ok("interface", &format!("{HEADER}Material \"interface\"\n"));
     assert_eq!(d.media.null_materials, vec![0]);

@@ -88,9 +88,15 @@ fn mix(x: u64) -> u64 {
 
 impl Scene {
     /// Whether the hit of `primitive` at parameter `t` along `ray` (both in the primitive's own
-    /// space, world or object) survives the primitive's alpha mask; true without a mask.
+    /// space, world or object) survives the primitive's alpha mask; true without a mask. A hit
+    /// on the back side of a hair fibre's surface ([`crate::Material::is_fibre`]) never does.
     #[inline]
     pub(crate) fn alpha_keeps(&self, primitive: &Primitive, ray: &Ray, t: f32) -> bool {
+        if self.fibres.get(primitive.material as usize).copied().unwrap_or(false)
+            && ray.direction.dot(primitive.shape.normal_at(ray.at(t))) > 0.0
+        {
+            return false;
+        }
         let Some(index) = primitive.alpha else { return true };
         let Some(mask) = self.alpha_masks.get(index as usize) else { return true };
         mask.keeps(self.alpha_uv(primitive, ray.at(t)), ray, t)

@@ -144,6 +144,9 @@ pub struct Scene {
     reads_mesh_attribute: Vec<bool>,
     /// Per material: [`Material::is_anisotropic`] (hits then carry ∂p/∂u).
     anisotropic: Vec<bool>,
+    /// Per material: [`Material::is_fibre`] (hits on the back side are skipped, see
+    /// [`Scene::alpha_keeps`]).
+    pub(crate) fibres: Vec<bool>,
     bvh: Bvh,
 }
 
@@ -187,6 +190,7 @@ impl Scene {
         let light_selection = light_selection(&lights, &bounding_sphere, &own_groups).unwrap_or(None);
         let reads_mesh_attribute = materials.iter().map(|m| matches!(m.mesh_attribute(), Ok(Some(_)))).collect();
         let anisotropic = materials.iter().map(Material::is_anisotropic).collect();
+        let fibres = materials.iter().map(Material::is_fibre).collect();
         Self {
             name: name.into(),
             primitives,
@@ -204,6 +208,7 @@ impl Scene {
             light_selection,
             reads_mesh_attribute,
             anisotropic,
+            fibres,
             bvh,
         }
     }

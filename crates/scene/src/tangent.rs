@@ -69,7 +69,8 @@ impl Material {
     /// True when the material (or a part of it) has an anisotropic roughness, whose BSDF then
     /// needs the surface tangent ([`crate::ShadingPoint::tangent`]): a rough conductor or
     /// dielectric with `alpha_u ≠ alpha_v`, a textured roughness over one of them with two
-    /// different textures, or a principled material whose `anisotropic` is not a constant 0.
+    /// different textures, a principled material whose `anisotropic` is not a constant 0, or
+    /// hair (its fibre direction comes from the tangent).
     pub fn is_anisotropic(&self) -> bool {
         match self {
             Material::RoughConductor { alpha_u, alpha_v, .. } | Material::RoughDielectric { alpha_u, alpha_v, .. } => {
@@ -86,6 +87,8 @@ impl Material {
             Material::Principled(p) => varies(&p.anisotropic),
             Material::PrincipledThin(p) => varies(&p.anisotropic),
             Material::Coated(p) => p.is_anisotropic(),
+            // The fibre direction is `n × ∂p/∂u`.
+            Material::Hair(_) => true,
             _ => false,
         }
     }

@@ -115,7 +115,7 @@ fn rgb(v: [f64; 3]) -> Rgb {
 
 impl<'a> Loader<'a> {
     /// An index of refraction given as a number or a material name.
-    fn ior(&self, p: &Plugin, name: &str, default: f64) -> Result<f64, SceneError> {
+    pub(super) fn ior(&self, p: &Plugin, name: &str, default: f64) -> Result<f64, SceneError> {
         if let Some(prop) = p.prop(name) {
             use super::props::Value;
             let v = match &prop.value {
@@ -461,6 +461,7 @@ impl<'a> Loader<'a> {
             }
             "principled" => self.principled(&p)?,
             "principledthin" => self.principled_thin(&p)?,
+            "hair" => self.hair(&p)?,
             "fluorescent" => self.fluorescent(&p)?,
             "normalmap" | "bumpmap" => self.perturbing(&p)?,
             "mask" => {

@@ -35,6 +35,7 @@
 mod bsdf;
 mod colour;
 mod emitter;
+mod hair;
 mod mask;
 mod medium;
 mod principled;

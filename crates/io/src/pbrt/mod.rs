@@ -48,13 +48,15 @@
 //! - **Media**: homogeneous media, `MediumInterface` and the `interface` material (see
 //!   `medium.rs`); grid media are errors.
 //! - **Unsupported** features are errors naming them (grid media, textures other
-//!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `hair`, `measured`,
-//!   `subsurface`, …); the layered `coateddiffuse` and `coatedconductor` are in `coated.rs`;
+//!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `measured`, `subsurface`, …);
+//!   the layered `coateddiffuse` and `coatedconductor` are in `coated.rs`; `hair` is here and
+//!   `curve` shapes (tessellated into tubes) in `curve.rs`;
 //!   unsupported optional parameters are warnings in [`SceneDescription::warnings`].
 
 mod alpha;
 mod coated;
 pub mod color;
+mod curve;
 pub mod envmap;
 mod goniometric;
 mod instancing;
@@ -72,7 +74,7 @@ use scene::desc::{
     CameraDesc, EmissionSpectra, EmissionSpectrum, FilmDesc, FilterDesc, Geometry, LightDesc, MeshData, Projection,
     SceneDescription, ShapeDesc, TextureImage, UvTransform,
 };
-use scene::material::Material;
+use scene::material::{HairParameters, Material};
 use scene::microfacet::Distribution;
 use scene::texture::{FilterMode, Sampling, Texture, WrapMode};
 use spectrum::Rgb;
@@ -1183,11 +1185,48 @@ impl Builder {
             // An index-matched boundary: a placeholder the scene marks as such (`medium.rs`).
             "interface" => Material::Diffuse { reflectance: Texture::Constant(Rgb::BLACK) },
             "coateddiffuse" | "coatedconductor" => self.coated_material(d, ty)?,
-            other @ ("hair" | "measured" | "subsurface") => {
+            "hair" => Material::Hair(self.hair(p, d.pos)?),
+            other @ ("measured" | "subsurface") => {
                 return Err(err(file, d.pos, format!("material \"{other}\" is not supported")));
             }
             other => return Err(err(file, d.pos, format!("unknown material type \"{other}\""))),
         })
+    }
+
+    /// pbrt-v4's `hair`: the absorption from `sigma_a`, else from `reflectance` (pbrt-v3:
+    /// `color`) through Chiang et al.'s mapping, else from `eumelanin`/`pheomelanin` (eumelanin
+    /// 1.3 when none is given); `eta` 1.55, `beta_m`, `beta_n` 0.3, `alpha` 2°. Textured
+    /// parameters are not supported.
+    fn hair(&self, p: &ParamSet, pos: Pos) -> Result<HairParameters, SceneError> {
+        let constant = |name: &str, albedo: bool| -> Result<Option<Rgb>, SceneError> {
+            let Some(param) = p.find(name) else { return Ok(None) };
+            match self.spectrum_texture(p, name, Rgb::BLACK, albedo)? {
+                Texture::Constant(c) => Ok(Some(c)),
+                _ => Err(p.error(param.pos, format!("hair: a textured '{name}' is not supported"))),
+            }
+        };
+        let mut hair = HairParameters {
+            eta: p.float("eta", 1.55)?,
+            beta_m: p.float("beta_m", 0.3)?,
+            beta_n: p.float("beta_n", 0.3)?,
+            alpha: p.float("alpha", 2.0)?,
+            ..HairParameters::default()
+        };
+        let reflectance = match constant("reflectance", true)? {
+            Some(c) => Some(c),
+            None => constant("color", true)?,
+        };
+        let (eumelanin, pheomelanin) = (p.float_opt("eumelanin")?, p.float_opt("pheomelanin")?);
+        hair.sigma_a = if let Some(s) = constant("sigma_a", false)? {
+            s
+        } else if let Some(c) = reflectance {
+            HairParameters::sigma_a_from_color(c, hair.beta_n)
+        } else {
+            let eumelanin = if pheomelanin.is_none() { eumelanin.unwrap_or(1.3) } else { eumelanin.unwrap_or(0.0) };
+            HairParameters::sigma_a_from_melanin(eumelanin, pheomelanin.unwrap_or(0.0))
+        };
+        hair.validate().map_err(|e| p.error(pos, e))?;
+        Ok(hair)
     }
 
     /// A conductor's η or k: constant RGB (named spectra via the table in [`color`]).
@@ -1382,7 +1421,8 @@ impl Builder {
                 Geometry::Mesh(self.to_world_mesh(file, d.pos, object)?)
             }
             "loopsubdiv" => Geometry::Mesh(self.to_world_mesh(file, d.pos, loop_subdivision_mesh(file, d)?)?),
-            other @ ("curve" | "cone" | "paraboloid" | "hyperboloid") => {
+            "curve" => Geometry::Mesh(self.to_world_mesh(file, d.pos, curve::curve_mesh(p, d.pos)?)?),
+            other @ ("cone" | "paraboloid" | "hyperboloid") => {
                 return Err(err(file, d.arg_pos[0], format!("shape \"{other}\" is not supported")));
             }
             other => return Err(err(file, d.arg_pos[0], format!("unknown shape type \"{other}\""))),

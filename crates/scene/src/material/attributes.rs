@@ -10,7 +10,7 @@ impl Material {
     /// or bump map textures, which perturb the shading normal before).
     fn for_each_bsdf_texture<'a>(&'a self, f: &mut dyn FnMut(&'a Texture)) {
         match self {
-            Material::Reference(_) => {}
+            Material::Reference(_) | Material::Hair(_) => {}
             Material::Diffuse { reflectance } | Material::Fluorescent { reflectance, .. } => f(reflectance),
             Material::Conductor { specular_reflectance, .. }
             | Material::RoughConductor { specular_reflectance, .. } => f(specular_reflectance),

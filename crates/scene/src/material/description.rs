@@ -7,6 +7,7 @@ use spectrum::ior::Ior;
 
 use super::MAX_COMPONENTS;
 use super::coated_parameters::CoatedParameters;
+use super::hair::HairParameters;
 use super::map_adapter::MapOptions;
 use super::principled::PrincipledParameters;
 use super::principled_thin::PrincipledThinParameters;
@@ -143,6 +144,9 @@ pub enum Material {
     /// pbrt-v4's `coateddiffuse` and `coatedconductor`: a dielectric interface over a
     /// scattering medium over a diffuse or conductor base, one-sided (see `material/coated.rs`).
     Coated(Box<CoatedParameters>),
+    /// pbrt-v4's `hair` (Chiang et al. 2016) on curve tubes, two-sided; the fibre runs along
+    /// the local y axis `n × ∂p/∂u` (see `material/hair.rs`).
+    Hair(HairParameters),
     /// Linear blend `(1 − weight)·first + weight·second`.
     Blend {
         /// Blend weight in [0, 1] (the first channel of the texture is used).
@@ -334,6 +338,9 @@ impl Material {
             return Err("a normalmap or bumpmap cannot wrap the reference material (it has no shading normal)".into());
         }
         self.check_textured_roughness()?;
+        if let Material::Hair(p) = self {
+            p.validate()?;
+        }
         if let Material::Fluorescent { reflectance, fluorescence } = self {
             fluorescence.check_energy(reflectance.max_value().max_component())?;
         }

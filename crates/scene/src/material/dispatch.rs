@@ -14,6 +14,7 @@ use super::description::Material;
 use super::dielectric::Dielectric;
 use super::diffuse::Diffuse;
 use super::diffuse_transmission::DiffuseTransmission;
+use super::hair::Hair;
 use super::lobe::{ModelEval, Sampled};
 use super::plastic::Plastic;
 use super::principled::Principled;
@@ -98,6 +99,7 @@ pub(super) enum Model {
     Principled(Principled),
     PrincipledThin(PrincipledThin),
     Coated(Coated),
+    Hair(Hair),
 }
 
 /// `each_model!(model, m => expression)`: evaluates the expression with `m` bound to the
@@ -117,6 +119,7 @@ macro_rules! each_model {
             Model::Principled($m) => $e,
             Model::PrincipledThin($m) => $e,
             Model::Coated($m) => $e,
+            Model::Hair($m) => $e,
         }
     };
 }
@@ -218,6 +221,7 @@ impl Model {
             Material::Principled(p) => Model::Principled(Principled::new(p, uv)),
             Material::PrincipledThin(p) => Model::PrincipledThin(PrincipledThin::new(p, uv)),
             Material::Coated(p) => Model::Coated(Coated::new(p, uv)),
+            Material::Hair(p) => Model::Hair(Hair::new(p)),
         };
         Some(model)
     }

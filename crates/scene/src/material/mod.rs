@@ -51,7 +51,8 @@
 //! `coating`; the rough one's tables are in `rough_coating`), `principled` and
 //! `principled_thin` (sharing `disney`; the clearcoat lobe in `clearcoat`), pbrt-v4's coated
 //! materials in `coated` (parameters in `coated_parameters`, pbrt's random walk in
-//! `layered_walk` over the pieces in `layered_interfaces`), and
+//! `layered_walk` over the pieces in `layered_interfaces`), the hair fibre model of Chiang et al.
+//! 2016 in `hair` (its 1-D functions in `hair_functions`), and
 //! SmallVCM's `reference` material, which keeps its own BSDF. Shared helpers have their own
 //! files: `fresnel`, `lobe` (sample/evaluation records), `shading` (shading point,
 //! transport mode, side tests, shading frame), GGX and Beckmann in [`crate::microfacet`].
@@ -86,6 +87,8 @@ mod diffuse_transmission;
 mod disney;
 mod dispatch;
 mod fresnel;
+mod hair;
+mod hair_functions;
 mod layered_interfaces;
 mod layered_walk;
 mod lobe;
@@ -110,6 +113,7 @@ pub use bump_map::luminance_gradient;
 pub use coated_parameters::{CoatedBase, CoatedParameters, CoatingInterface, CoatingLayer, ConductorIor};
 pub use description::Material;
 pub use fresnel::fresnel_dielectric;
+pub use hair::{EUMELANIN_SIGMA_A, HairParameters, PHEOMELANIN_SIGMA_A};
 pub use map_adapter::MapOptions;
 pub use perturb::SurfaceTangents;
 pub use principled::PrincipledParameters;
