@@ -312,9 +312,8 @@ impl<'a> Renderer<'a> {
 
 /// The error for a scene with participating media or index-matched boundaries that
 /// `algorithm` cannot render: the path tracer, light tracing and bidirectional path tracing
-/// render them (`crate::vcm::medium`) when the camera is not inside a medium; the merging
-/// algorithms not yet (issue #15); no algorithm renders them together with fluorescent
-/// materials.
+/// render them (`crate::vcm::medium`); the merging algorithms not yet (issue #15); no
+/// algorithm renders them together with fluorescent materials.
 pub fn check_media(scene: &Scene, algorithm: Algorithm) -> Result<(), String> {
     if !scene.media.is_active() {
         return Ok(());
@@ -324,10 +323,6 @@ pub fn check_media(scene: &Scene, algorithm: Algorithm) -> Result<(), String> {
         Algorithm::PathTracing | Algorithm::Vcm(VcmAlgorithm::LightTracing | VcmAlgorithm::BidirectionalPathTracing)
     ) {
         return Err("media are rendered by pt, lt and bpt only so far (issue #15)".to_string());
-    }
-    if algorithm != Algorithm::PathTracing && scene.media.camera.is_some() {
-        // An open bias (+2 % on the camera-inside furnace, `vcm_media.rs`) is not understood yet.
-        return Err("lt and bpt do not render a camera inside a medium yet (issue #15); use pt".to_string());
     }
     if scene.has_fluorescence() {
         return Err("fluorescent materials in a scene with media are not supported yet (issue #15)".to_string());

@@ -58,7 +58,11 @@ pub fn trace_light_path<S: SpectralMode>(
         origin_offset: RAY_EPSILON,
         terminated: false,
         slots: S::Slots::default(),
-        flight: Flight { unresolved: media_active, ..Flight::start(None, false, RAY_EPSILON) },
+        flight: Flight {
+            unresolved: media_active,
+            fallback: if light.is_finite() { scene.media.camera } else { None },
+            ..Flight::start(None, false, RAY_EPSILON)
+        },
     };
 
     loop {
