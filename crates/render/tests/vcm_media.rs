@@ -195,3 +195,78 @@ fn light_tracing_truth(scene: &Scene) -> Vec<f64> {
     }
     sums.iter().map(|s| s / (n * n) as f64).collect()
 }
+
+/// A fog-filled diffuse room: the inside of a sphere of radius 2 (albedo 0.5, its interior
+/// filled with σ_t = (0.3, 0.5, 0.8), albedo 0.8, HG g = 0.3), a small emitting sphere and a
+/// diffuse ball without interfaces inside (they keep the fog), the camera in the fog.
+fn fog_room(resolution: u32) -> Scene {
+    let medium = Medium {
+        coefficients: Coefficients::ExtinctionAlbedo {
+            sigma_t: Coefficient::rgb(Rgb::new(0.3, 0.5, 0.8)),
+            albedo: Coefficient::rgb(Rgb::splat(0.8)),
+        },
+        scale: 1.0,
+        phase: PhaseFunction::henyey_greenstein(0.3).unwrap(),
+    };
+    let mut media = MediaDesc { media: vec![medium], camera: Some(0), ..Default::default() };
+    media.shapes.insert(0, MediumInterface { interior: Some(0), exterior: None });
+    let sphere = |name: &str, center: Vec3, radius: f32, material: u32, emission: Option<Rgb>| ShapeDesc {
+        name: name.into(),
+        geometry: Geometry::Sphere { center, radius, flip_normals: false },
+        material,
+        emission,
+        alpha: None,
+    };
+    let desc = SceneDescription {
+        name: "fog room".into(),
+        camera: CameraDesc {
+            position: Vec3::new(0.0, 0.0, -1.5),
+            forward: Vec3::Z,
+            up: Vec3::Y,
+            right: Vec3::X,
+            projection: Projection::Perspective { horizontal_fov_degrees: 60.0 },
+        },
+        film: FilmDesc { width: resolution, height: resolution, filter: FilterDesc::Box },
+        materials: vec![
+            Material::Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) },
+            Material::Diffuse { reflectance: Texture::Constant(Rgb::new(0.7, 0.4, 0.3)) },
+        ],
+        shapes: vec![
+            sphere("room", Vec3::ZERO, 2.0, 0, None),
+            sphere("light", Vec3::new(0.5, 0.8, 0.5), 0.2, 0, Some(Rgb::splat(20.0))),
+            sphere("ball", Vec3::new(-0.5, -0.7, 0.6), 0.4, 1, None),
+        ],
+        lights: Vec::new(),
+        max_path_length: None,
+        warnings: Vec::new(),
+        emission_spectra: Default::default(),
+        objects: Vec::new(),
+        instances: Vec::new(),
+        media,
+    };
+    Scene::from_description(&desc, None).unwrap().0
+}
+
+/// bpt against pt per 8 × 8 block (and channel) of a fog-filled room with surfaces: both are
+/// unbiased, so their block means agree within the combined standard errors (Z-test, Šidák
+/// over the 48 entries, α = 1e-3); the power check asks that the test sees a 5 % bias of bpt
+/// in the image mean (the blocks alone are noisier).
+#[test]
+fn bpt_matches_pt_per_block_in_a_fog_room() {
+    let scene = fog_room(32);
+    let run = |algorithm: &str, iterations: u64, seed: u64| {
+        let settings = RenderSettings { max_length: 8, ..common::settings(algorithm, seed) };
+        common::block_estimate(&scene, &settings, iterations, 8)
+    };
+    let pt = run("pt", 600, 5);
+    let bpt = run("bpt", 300, 6);
+    let outcome = z_test_entries(&bpt.means, &bpt.std_errors, &pt.means, &pt.std_errors, 1e-3);
+    eprintln!("fog room, bpt vs pt per block: {outcome}");
+    assert!(outcome.passed, "{outcome}");
+    let keep = vec![true; bpt.means.len() / 3];
+    let ((bm, be), (pm, pe)) = (bpt.pooled(&keep), pt.pooled(&keep));
+    let detectable = common::detectable_bias(&bm, &be, &pm, &pe, 1e-3);
+    eprintln!("image means bpt {bm:?} ± {be:?}, pt {pm:?} ± {pe:?}; detects {:.2} %", 100.0 * detectable);
+    assert!(z_test_entries(&bm, &be, &pm, &pe, 1e-3).passed, "image means differ");
+    assert!(detectable < 0.05, "no power: detects only {:.2} %", 100.0 * detectable);
+}
