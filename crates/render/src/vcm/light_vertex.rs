@@ -207,7 +207,7 @@ impl<S: SpectralMode> LightVertex<S> {
             if data.shading_normal == data.normal { normal } else { octahedral::encode(data.shading_normal) };
         Self {
             record,
-            material: data.material,
+            material: data.material.min(MAX_MATERIAL),
             normal,
             shading_normal,
             texture: match (data.attribute, data.tangent) {
@@ -556,6 +556,20 @@ mod tests {
         let r = v.record;
         assert_eq!((v.material(), r.path_length(), r.terminated()), (MAX_MATERIAL, MAX_PATH_LENGTH, false));
         assert_eq!(r.continuation(), 0.75);
+        assert!(v.medium().is_none() && !r.in_medium(), "a saturated material is no medium vertex");
+    }
+
+    #[test]
+    fn medium_vertices_keep_their_flag_medium_and_continuation() {
+        for (i, continuation) in [0.0f32, 0.3, 0.999_99, 1.0].into_iter().enumerate() {
+            let d = data(i as u32);
+            let v = LightVertex::new_in_medium(d.position, d.throughput, d.mis, 7, 3, d.fixed, continuation, true);
+            let r = &v.record;
+            assert_eq!((v.medium(), r.in_medium(), r.path_length(), r.terminated()), (Some(3), true, 7, true));
+            assert!((r.continuation() - continuation).abs() <= continuation * 6.2e-5, "{continuation}");
+            assert!(r.fixed().angle_between(d.fixed) < octahedral::MAX_ANGULAR_ERROR);
+            assert!(!LightVertex::new(&d).record.in_medium());
+        }
     }
 
     /// Continuation probabilities come back within the documented relative error 2⁻¹⁴, 0 and 1
