@@ -311,14 +311,18 @@ impl<'a> Renderer<'a> {
 }
 
 /// The error for a scene with participating media or index-matched boundaries that
-/// `algorithm` cannot render: only the path tracer renders them so far (issue #15), and not
-/// together with fluorescent materials.
+/// `algorithm` cannot render: the path tracer, light tracing and bidirectional path tracing
+/// render them (`crate::vcm::medium`); the merging algorithms not yet (issue #15); no
+/// algorithm renders them together with fluorescent materials.
 pub fn check_media(scene: &Scene, algorithm: Algorithm) -> Result<(), String> {
     if !scene.media.is_active() {
         return Ok(());
     }
-    if algorithm != Algorithm::PathTracing {
-        return Err("media are rendered by pt only so far (issue #15)".to_string());
+    if !matches!(
+        algorithm,
+        Algorithm::PathTracing | Algorithm::Vcm(VcmAlgorithm::LightTracing | VcmAlgorithm::BidirectionalPathTracing)
+    ) {
+        return Err("media are rendered by pt, lt and bpt only so far (issue #15)".to_string());
     }
     if scene.has_fluorescence() {
         return Err("fluorescent materials in a scene with media are not supported yet (issue #15)".to_string());

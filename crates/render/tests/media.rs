@@ -159,11 +159,13 @@ fn scattering_furnace_conserves_energy() {
 #[test]
 fn other_algorithms_refuse_media() {
     let scene = sphere_scene(medium(Rgb::splat(1.0), 0.5, 0.0));
-    for algorithm in [Algorithm::Vcm(VcmAlgorithm::VertexConnectionMerging), Algorithm::Vcm(VcmAlgorithm::LightTracing)]
-    {
+    for algorithm in [
+        Algorithm::Vcm(VcmAlgorithm::VertexConnectionMerging),
+        Algorithm::Vcm(VcmAlgorithm::BidirectionalPhotonMapping),
+    ] {
         let settings = RenderSettings { algorithm, threads: 1, ..RenderSettings::default() };
         let error = Renderer::new(&scene, &settings).err().expect("media must be refused");
-        assert!(error.contains("media are rendered by pt only so far (issue #15)"), "{error}");
+        assert!(error.contains("media are rendered by pt, lt and bpt only so far (issue #15)"), "{error}");
     }
     let settings = RenderSettings { algorithm: Algorithm::PathTracing, threads: 1, ..RenderSettings::default() };
     assert!(Renderer::new(&scene, &settings).is_ok());

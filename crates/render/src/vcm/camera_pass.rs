@@ -3,13 +3,14 @@
 //! merges with all light vertices in range (s, t ≥ 2), then BSDF sampling with Russian
 //! roulette.
 
-use math::{Rng, Vec3};
+use math::{RAY_EPSILON, Rng, Vec3};
 use scene::camera::PrimaryDensity;
 use scene::{Bsdf, Scene, TransportMode};
 use spectrum::SpectralMode;
 
 use super::connect::{CameraEnd, connect_vertices, next_event};
 use super::light_vertex::LightPath;
+use super::medium::{Arrival, Flight, MediumSide, Scatterer, advance};
 use super::merge::{MergeScope, MergeSource, MergeWeighting, merge};
 use super::mis::{self, SubPathMis};
 use super::subpath::SubPath;
@@ -104,7 +105,9 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         origin_offset: 0.0,
         terminated: false,
         slots: S::Slots::default(),
+        flight: Flight::start(scene.media.camera, false, 0.0),
     };
+    let media_active = scene.media.is_active();
     // Merging across wavelength groups: the throughput at every group's wavelengths.
     let group_sets = match merge_source.map(|s| s.scope) {
         Some(MergeScope::AcrossGroups(_, sets)) => sets,
@@ -114,7 +117,23 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     let group_throughputs = &mut group_throughputs[..group_sets.len()];
 
     loop {
-        let Some(hit) = scene.intersect(&path.ray) else {
+        let arrival = if media_active {
+            let p = &mut path;
+            advance(scene, &mut p.ray, &mut p.origin_offset, &mut p.flight, &mut p.throughput, rng, w)
+        } else {
+            scene.intersect(&path.ray).map_or(Arrival::Escaped, Arrival::Surface)
+        };
+        if let Arrival::Medium { position, distance, medium } = arrival {
+            let args = (position, distance, medium);
+            if !medium_vertex(scene, it, &mut path, args, rng, light_path, merge_source, k, radius, w, out) {
+                break;
+            }
+            continue;
+        }
+        let Arrival::Surface(hit) = arrival else {
+            if media_active {
+                path.mis.apply_flight(path.flight.forward, path.flight.reverse);
+            }
             // Escaped: the environment light (infinite: no distance update, §5.1).
             if let Some(index) = scene.background
                 && let Some(emitted) = scene.lights[index as usize].radiance_on_hit(
@@ -138,6 +157,10 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         let cos_fixed = hit.normal.dot(-direction).abs();
         let distance_squared = path.arrival_distance_squared(hit.distance);
         path.mis.arrive(distance_squared, cos_fixed);
+        if media_active {
+            path.mis.apply_flight(path.flight.forward, path.flight.reverse);
+        }
+        let side = MediumSide::at_surface(scene, &hit, path.flight.medium);
         // Camera sub-path vertices up to this hit.
         let t = path.path_length + 1;
 
@@ -167,7 +190,12 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         }
 
         let fluorescent = FluorescentVertex::at(scene.material(&hit), hit.uv);
-        let end = CameraEnd { bsdf: &bsdf, position: hit.position, fluorescent: fluorescent.as_ref() };
+        let end = CameraEnd {
+            scatterer: Scatterer::Surface(&bsdf),
+            position: hit.position,
+            fluorescent: fluorescent.as_ref(),
+            side,
+        };
         let mut specular_only = false;
         if !bsdf.is_delta() {
             if techniques.connect {
@@ -201,11 +229,70 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         else {
             break;
         };
+        path.flight = Flight::start(side.towards(path.ray.direction), false, RAY_EPSILON);
         for (throughput, set) in group_throughputs.iter_mut().zip(group_sets) {
             // As `SubPath::scatter` updates `path.throughput` (no fluorescence here).
             *throughput *= S::from_reflectance(set, scattered.value) * scattered.scale;
         }
     }
+}
+
+/// A camera sub-path's vertex in a medium (`args`: position, distance along the ray, medium
+/// index): next-event estimation, connections to the pixel's light sub-path and merges (medium
+/// vertices merge with medium vertices), then phase sampling. Returns false when the walk ends.
+/// (Camera paths in media never merge across wavelength groups: the engine groups such
+/// scenes.)
+#[allow(clippy::too_many_arguments)]
+fn medium_vertex<S: SpectralMode, R: Record>(
+    scene: &Scene,
+    it: &Iteration,
+    path: &mut SubPath<S>,
+    (position, distance, medium): (Vec3, f32, u32),
+    rng: &mut Rng,
+    light_path: LightPath<S>,
+    merge_source: Option<&MergeSource<S>>,
+    k: &mis::MisConstants,
+    radius: f32,
+    w: &S::Wavelengths,
+    out: &mut R,
+) -> bool {
+    if path.throughput.is_black() {
+        return false;
+    }
+    let techniques = &it.techniques;
+    let distance_squared = path.arrival_distance_squared(distance);
+    path.mis.arrive(distance_squared, 1.0);
+    path.mis.apply_flight(path.flight.forward, path.flight.reverse);
+    if path.path_length >= it.max_length {
+        return false;
+    }
+    let t = path.path_length + 1;
+    let m = scene.media.medium(medium);
+    let end = CameraEnd {
+        scatterer: Scatterer::Medium(m, -path.ray.direction),
+        position,
+        fluorescent: None,
+        side: MediumSide::inside(Some(medium)),
+    };
+    if techniques.connect {
+        out.record(Family::NextEvent, 1, t, next_event(scene, path, &end, rng, k, w).to_rgb(w));
+        for light in light_path.iter() {
+            if light.record.path_length() + 1 + path.path_length > it.max_length {
+                break;
+            }
+            let value = connect_vertices(scene, path, &end, light, k, w, rng);
+            out.record(Family::Connection, light.record.path_length() + 1, t, value.to_rgb(w));
+        }
+    }
+    if let Some(source) = merge_source {
+        let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
+        let merged = merge(path, &[], &end, source, radius, it.max_length, weighting, k, w, rng, out);
+        out.record(Family::Merging, 0, t, merged);
+        if techniques.ppm {
+            return false;
+        }
+    }
+    path.scatter_medium(m, medium, position, rng, k)
 }
 
 /// MIS weight of an emitter hit, or `None` when the enabled techniques do not count it.

@@ -3,12 +3,13 @@
 //! weight of an emitter hit by a camera path (s = 0).
 
 use math::{Rng, Vec2, Vec3};
+use scene::Scene;
 use scene::filter::FilmMode;
-use scene::{Bsdf, Scene};
 use spectrum::{Rgb, SpectralMode};
 
 use super::Iteration;
 use super::light_vertex::LightVertex;
+use super::medium::{MediumSide, Scatterer, segment};
 use super::mis::{self, ConnectionPdfs, MisConstants, NeePdfs};
 use super::subpath::SubPath;
 use crate::fluorescent::{FluorescentVertex, scatter_slots, view};
@@ -58,21 +59,45 @@ pub fn connect_to_camera<S: SpectralMode>(
     splats: &mut Vec<Splat>,
     wavelengths: &S::Wavelengths,
 ) {
-    let (bsdf, position) = (end.bsdf, end.position);
+    let (scatterer, position) = (&end.scatterer, end.position);
     let camera = &scene.camera;
     let u_lens = if camera.needs_lens_sample() { rng.uniform2() } else { [0.5, 0.5] };
     let Some(connection) = camera.connect(position, u_lens) else { return };
-    let Some(eval) = bsdf.evaluate(connection.direction) else { return };
+    let Some(eval) = scatterer.evaluate(connection.direction) else { return };
+    // With media: the segment's transmittance, and the camera ray's free-flight density of
+    // reaching this vertex (the segment's reverse product, `super::medium`).
+    let media = if scene.media.is_active() {
+        let towards = end.side.towards(connection.direction);
+        let d = connection.distance;
+        let Some(segment) =
+            segment::<S>(scene, position, connection.direction, d, towards, scatterer.is_medium(), false, wavelengths)
+        else {
+            return;
+        };
+        Some(segment)
+    } else {
+        None
+    };
     // Density of the camera sampling this point: image-plane density 1 per pixel, to area at
-    // the vertex (the thin lens' lens-point density cancels between techniques).
+    // the vertex (the thin lens' lens-point density cancels between techniques). It is also the
+    // camera's importance times the geometry term in the estimate. With media the weight
+    // takes the camera ray's free-flight density of reaching the vertex on top (`mis_pdf_a`).
     let camera_pdf_a = connection.area_pdf(eval.cos_generated).0;
-    let reverse = eval.pdf.reverse.0 * bsdf.continuation_probability();
+    let mis_pdf_a = match &media {
+        Some(segment) => connection.area_pdf(eval.cos_generated * segment.reverse).0,
+        None => camera_pdf_a,
+    };
+    let reverse = eval.reverse * scatterer.continuation();
     // The pixel integral is over the image plane: the estimate is f·T·(camera pdf)/N_L.
-    let unweighted = scatter_slots(end.fluorescent, wavelengths, eval.value, light.throughput, rng).to_rgb(wavelengths);
+    let unweighted = match &media {
+        Some(segment) => scatterer.spectral::<S>(wavelengths, eval.value) * light.throughput * segment.transmittance,
+        None => scatter_slots(end.fluorescent, wavelengths, eval.value, light.throughput, rng),
+    }
+    .to_rgb(wavelengths);
     let weight_for = |k: &MisConstants| {
         if weighted {
             let light_mis = if it.rebase() { light.mis.for_constants(k) } else { light.mis };
-            mis::camera_connection_weight(&light_mis, camera_pdf_a, reverse, k)
+            mis::camera_connection_weight(&light_mis, mis_pdf_a, reverse, k)
         } else {
             1.0
         }
@@ -109,29 +134,33 @@ pub fn connect_to_camera<S: SpectralMode>(
             splats.push(Splat { target: SplatTarget::Filtered(connection.raster), value, s });
         }
     }
-    if splats.len() > start && scene.occluded(position, connection.direction, connection.distance) {
+    if splats.len() > start && media.is_none() && scene.occluded(position, connection.direction, connection.distance) {
         splats.truncate(start);
     }
 }
 
 /// The end of a light sub-path being connected to the camera.
 pub struct LightEnd<'a> {
-    /// Its BSDF (importance transport).
-    pub bsdf: &'a Bsdf,
+    /// Its BSDF (importance transport) or phase function.
+    pub scatterer: Scatterer<'a>,
     /// Its position.
     pub position: Vec3,
     /// Its fluorescence, if any.
     pub fluorescent: Option<&'a FluorescentVertex<'a>>,
+    /// The media around it.
+    pub side: MediumSide,
 }
 
 /// The end of a camera sub-path being connected or merged.
 pub struct CameraEnd<'a> {
-    /// Its BSDF (radiance transport).
-    pub bsdf: &'a Bsdf,
+    /// Its BSDF (radiance transport) or phase function.
+    pub scatterer: Scatterer<'a>,
     /// Its position.
     pub position: Vec3,
     /// Its fluorescence, if any.
     pub fluorescent: Option<&'a FluorescentVertex<'a>>,
+    /// The media around it.
+    pub side: MediumSide,
 }
 
 impl CameraEnd<'_> {
@@ -147,6 +176,9 @@ impl CameraEnd<'_> {
         rng: &mut Rng,
         w: &S::Wavelengths,
     ) -> S {
+        if self.scatterer.is_medium() {
+            return arriving * self.scatterer.spectral::<S>(w, value);
+        }
         view(&camera.slots, scatter_slots(self.fluorescent, w, value, arriving, rng))
     }
 }
@@ -160,21 +192,45 @@ pub fn next_event<S: SpectralMode>(
     k: &MisConstants,
     wavelengths: &S::Wavelengths,
 ) -> S {
-    let (bsdf, position) = (end.bsdf, end.position);
+    let (scatterer, position) = (&end.scatterer, end.position);
     let pick_u = rng.uniform();
     let u = rng.uniform2();
     let Some((index, light, pick)) = scene.pick_light(pick_u) else { return S::default() };
     let Some(direct) = light.sample_direct(position, u, &scene.bounding_sphere) else { return S::default() };
-    let Some(eval) = bsdf.evaluate(direct.direction) else { return S::default() };
-    let continuation = bsdf.continuation_probability();
-    let pdfs = NeePdfs {
+    let Some(eval) = scatterer.evaluate(direct.direction) else { return S::default() };
+    let continuation = scatterer.continuation();
+    let mut pdfs = NeePdfs {
         direct_w: direct.direct_pdf.0 * pick,
         emission_w: direct.emission_pdf.0 * pick,
-        bsdf_forward_w: if light.is_delta() { 0.0 } else { eval.pdf.forward.0 * continuation },
-        bsdf_reverse_w: eval.pdf.reverse.0 * continuation,
+        bsdf_forward_w: if light.is_delta() { 0.0 } else { eval.forward * continuation },
+        bsdf_reverse_w: eval.reverse * continuation,
         cos_at_vertex: eval.cos_generated,
         cos_at_light: direct.cos_at_light,
     };
+    if scene.media.is_active() {
+        // The shadow segment: transmittance; BSDF/phase sampling reaches the light only past
+        // every piece (forward product), emission reaches the vertex with the reverse one.
+        let towards = end.side.towards(direct.direction);
+        let Some(segment) = segment::<S>(
+            scene,
+            position,
+            direct.direction,
+            direct.distance,
+            towards,
+            scatterer.is_medium(),
+            false,
+            wavelengths,
+        ) else {
+            return S::default();
+        };
+        pdfs.bsdf_forward_w *= segment.forward;
+        pdfs.cos_at_vertex *= segment.reverse;
+        let weight = mis::nee_weight(&camera.mis, &pdfs, k);
+        let emitted = scene.emission::<S>(index, wavelengths, direct.radiance) * segment.transmittance;
+        let value =
+            end.receive(camera, eval.value, emitted, rng, wavelengths) * (weight * eval.cos_generated / pdfs.direct_w);
+        return camera.throughput * value;
+    }
     let weight = mis::nee_weight(&camera.mis, &pdfs, k);
     let emitted = scene.emission::<S>(index, wavelengths, direct.radiance);
     let value =
@@ -198,27 +254,58 @@ pub fn connect_vertices<S: SpectralMode>(
     wavelengths: &S::Wavelengths,
     rng: &mut Rng,
 ) -> S {
-    let (bsdf, position) = (end.bsdf, end.position);
+    let (scatterer, position) = (&end.scatterer, end.position);
     let to_light = light.record.position - position;
     let distance_squared = to_light.length_squared();
     let distance = distance_squared.sqrt();
     let direction = to_light / distance;
-    let Some(camera_eval) = bsdf.evaluate(direction) else { return S::default() };
-    let Some(light_bsdf) = light.bsdf(scene, S::hero_wavelength(wavelengths)) else { return S::default() };
-    let Some(light_eval) = light_bsdf.evaluate(-direction) else { return S::default() };
-    let camera_continuation = bsdf.continuation_probability();
+    let Some(camera_eval) = scatterer.evaluate(direction) else { return S::default() };
+    let light_bsdf;
+    let light_medium = light.medium().map(|m| scene.media.medium(m));
+    let light_scatterer = match light_medium {
+        Some(m) => Scatterer::Medium(m, light.record.fixed()),
+        None => {
+            let Some(bsdf) = light.bsdf(scene, S::hero_wavelength(wavelengths)) else { return S::default() };
+            light_bsdf = bsdf;
+            Scatterer::Surface(&light_bsdf)
+        }
+    };
+    let Some(light_eval) = light_scatterer.evaluate(-direction) else { return S::default() };
+    let media = if scene.media.is_active() {
+        let towards = end.side.towards(direction);
+        let (from, to) = (scatterer.is_medium(), light_medium.is_some());
+        let Some(segment) = segment::<S>(scene, position, direction, distance, towards, from, to, wavelengths) else {
+            return S::default();
+        };
+        Some(segment)
+    } else {
+        None
+    };
+    let (forward, reverse) = media.map_or((1.0, 1.0), |m| (m.forward, m.reverse));
+    let camera_continuation = scatterer.continuation();
     let inv_d2 = 1.0 / distance_squared;
     let pdfs = ConnectionPdfs {
-        camera_forward_a: camera_eval.pdf.forward.0 * camera_continuation * light_eval.cos_generated * inv_d2,
-        camera_reverse_w: camera_eval.pdf.reverse.0 * camera_continuation,
-        light_forward_a: light_eval.pdf.forward.0 * light.record.continuation() * camera_eval.cos_generated * inv_d2,
-        light_reverse_w: light_eval.pdf.reverse.0 * light.record.continuation(),
+        camera_forward_a: camera_eval.forward * camera_continuation * (light_eval.cos_generated * forward) * inv_d2,
+        camera_reverse_w: camera_eval.reverse * camera_continuation,
+        light_forward_a: light_eval.forward
+            * light.record.continuation()
+            * (camera_eval.cos_generated * reverse)
+            * inv_d2,
+        light_reverse_w: light_eval.reverse * light.record.continuation(),
     };
     let light_mis = light.record.mis(k);
     let weight = mis::connection_weight(&light_mis, &camera.mis, &pdfs, k);
     let geometry = camera_eval.cos_generated * light_eval.cos_generated * inv_d2;
     let both_terminated = camera.terminated && light.record.terminated();
     let scale = if both_terminated { S::DOUBLE_TERMINATION } else { 1.0 };
+    if let Some(segment) = media {
+        // Media (no fluorescence: the driver refuses it with media).
+        let value = scatterer.spectral::<S>(wavelengths, camera_eval.value)
+            * light_scatterer.spectral::<S>(wavelengths, light_eval.value)
+            * segment.transmittance
+            * (weight * geometry * scale);
+        return view(&camera.slots, light.record.throughput * value) * camera.throughput;
+    }
     let light_fluorescent = light.fluorescent(scene);
     if end.fluorescent.is_none() && light_fluorescent.is_none() && camera.slots == S::Slots::default() {
         let value = S::from_reflectance(wavelengths, camera_eval.value)

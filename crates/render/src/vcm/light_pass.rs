@@ -1,7 +1,7 @@
 //! The light pass: traces light sub-paths, stores their non-specular vertices and connects
 //! each to the camera (t = 1).
 
-use math::{RAY_EPSILON, Ray, Rng};
+use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::{Bsdf, Scene, TransportMode};
 use spectrum::SpectralMode;
 
@@ -10,6 +10,7 @@ use crate::fluorescent::FluorescentVertex;
 use super::Iteration;
 use super::connect::{LightEnd, Splat, connect_to_camera};
 use super::light_vertex::{LightVertex, VertexData};
+use super::medium::{Arrival, Flight, MediumSide, Scatterer, advance};
 use super::mis::SubPathMis;
 use super::subpath::SubPath;
 
@@ -45,6 +46,7 @@ pub fn trace_light_path<S: SpectralMode>(
     if emission_pdf.is_nan() || emission_pdf <= 0.0 || emission.energy.is_black() {
         return;
     }
+    let media_active = scene.media.is_active();
     let cos_used = if light.is_finite() { emission.cos_at_light } else { 1.0 };
     let mut path = SubPath {
         ray: Ray::new(emission.origin + RAY_EPSILON * emission.direction, emission.direction),
@@ -56,9 +58,42 @@ pub fn trace_light_path<S: SpectralMode>(
         origin_offset: RAY_EPSILON,
         terminated: false,
         slots: S::Slots::default(),
+        flight: Flight {
+            unresolved: media_active,
+            fallback: if light.is_finite() { scene.media.camera } else { None },
+            ..Flight::start(None, false, RAY_EPSILON)
+        },
     };
 
-    while let Some(hit) = scene.intersect(&path.ray) {
+    loop {
+        let arrival = if media_active {
+            let p = &mut path;
+            advance(scene, &mut p.ray, &mut p.origin_offset, &mut p.flight, &mut p.throughput, rng, wavelengths)
+        } else {
+            scene.intersect(&path.ray).map_or(Arrival::Escaped, Arrival::Surface)
+        };
+        let hit = match arrival {
+            Arrival::Surface(hit) => hit,
+            Arrival::Escaped => break,
+            Arrival::Medium { position, distance, medium } => {
+                if !medium_vertex(
+                    scene,
+                    it,
+                    &mut path,
+                    position,
+                    distance,
+                    medium,
+                    rng,
+                    vertices,
+                    splats,
+                    &mut camera_rng,
+                    wavelengths,
+                ) {
+                    break;
+                }
+                continue;
+            }
+        };
         let fixed = -path.ray.direction;
         let Some(bsdf) =
             Bsdf::new_at(scene.material(&hit), &hit.shading_point(), fixed, TransportMode::Importance, hero)
@@ -67,6 +102,10 @@ pub fn trace_light_path<S: SpectralMode>(
         };
         let distance_squared = path.arrival_distance_squared(hit.distance);
         path.mis.arrive(distance_squared, bsdf.cos_fixed());
+        if media_active {
+            path.mis.apply_flight(path.flight.forward, path.flight.reverse);
+        }
+        let side = MediumSide::at_surface(scene, &hit, path.flight.medium);
         let fluorescent = FluorescentVertex::at(scene.material(&hit), hit.uv);
 
         if !bsdf.is_delta() {
@@ -88,7 +127,12 @@ pub fn trace_light_path<S: SpectralMode>(
                 }));
             }
             if techniques.connect_to_camera() && path.path_length < it.max_length {
-                let endpoint = LightEnd { bsdf: &bsdf, position: hit.position, fluorescent: fluorescent.as_ref() };
+                let endpoint = LightEnd {
+                    scatterer: Scatterer::Surface(&bsdf),
+                    position: hit.position,
+                    fluorescent: fluorescent.as_ref(),
+                    side,
+                };
                 connect_to_camera(
                     scene,
                     &path,
@@ -108,5 +152,59 @@ pub fn trace_light_path<S: SpectralMode>(
         if path.scatter(&bsdf, hit.position, rng, false, k, wavelengths, fluorescent.as_ref(), false).is_none() {
             break;
         }
+        path.flight = Flight::start(side.towards(path.ray.direction), false, RAY_EPSILON);
     }
+}
+
+/// A light sub-path's vertex in medium `medium` at `distance` along its ray: completes the MIS
+/// quantities (no cosine, `super::medium`), stores it, connects it to the camera and scatters
+/// with the phase function. Returns false when the walk ends.
+#[allow(clippy::too_many_arguments)]
+fn medium_vertex<S: SpectralMode>(
+    scene: &Scene,
+    it: &Iteration,
+    path: &mut SubPath<S>,
+    position: Vec3,
+    distance: f32,
+    medium: u32,
+    rng: &mut Rng,
+    vertices: &mut Vec<LightVertex<S>>,
+    splats: &mut Vec<Splat>,
+    camera_rng: &mut Rng,
+    wavelengths: &S::Wavelengths,
+) -> bool {
+    if path.throughput.is_black() {
+        return false;
+    }
+    let techniques = &it.techniques;
+    let m = scene.media.medium(medium);
+    let fixed = -path.ray.direction;
+    let distance_squared = path.arrival_distance_squared(distance);
+    path.mis.arrive(distance_squared, 1.0);
+    path.mis.apply_flight(path.flight.forward, path.flight.reverse);
+    if techniques.store_light_vertices() {
+        vertices.push(LightVertex::new_in_medium(
+            position,
+            path.throughput,
+            path.mis,
+            path.path_length,
+            medium,
+            fixed,
+            m.max_albedo(),
+            path.terminated,
+        ));
+    }
+    if techniques.connect_to_camera() && path.path_length < it.max_length {
+        let endpoint = LightEnd {
+            scatterer: Scatterer::Medium(m, fixed),
+            position,
+            fluorescent: None,
+            side: MediumSide::inside(Some(medium)),
+        };
+        connect_to_camera(scene, path, &endpoint, techniques.connect, it, camera_rng, splats, wavelengths);
+    }
+    if path.path_length + 2 > it.max_length {
+        return false;
+    }
+    path.scatter_medium(m, medium, position, rng, &it.constants)
 }

@@ -49,8 +49,15 @@ use spectrum::{Rgb, SpectralMode};
 
 use super::mis::{MisConstants, SubPathMis};
 
-/// Largest material index a light vertex can store.
-pub const MAX_MATERIAL: u32 = u32::MAX;
+/// Largest material index a light vertex can store (the top bit marks medium vertices).
+pub const MAX_MATERIAL: u32 = u32::MAX >> 1;
+
+/// The material word's flag of a medium vertex (its low bits hold the medium index).
+const MEDIUM_VERTEX: u32 = 1 << 31;
+
+/// The packed word's flag of a medium vertex: bit 31 holds bit 30 of the continuation
+/// probability's `f32`, which is 0 for every probability below 2.
+const IN_MEDIUM: u32 = 1 << 31;
 
 /// Largest path length a light vertex can store (2¹⁰ − 1 segments).
 pub const MAX_PATH_LENGTH: u32 = (1 << 10) - 1;
@@ -105,7 +112,13 @@ impl<S: SpectralMode> MergeRecord<S> {
     /// see the module doc).
     #[inline]
     pub fn continuation(&self) -> f32 {
-        f32::from_bits((self.packed >> CONTINUATION_SHIFT) << CONTINUATION_DROPPED_BITS)
+        f32::from_bits(((self.packed & !IN_MEDIUM) >> CONTINUATION_SHIFT) << CONTINUATION_DROPPED_BITS)
+    }
+
+    /// Whether the vertex lies in a medium (a volume vertex, `super::medium`), not on a surface.
+    #[inline]
+    pub fn in_medium(&self) -> bool {
+        self.packed & IN_MEDIUM != 0
     }
 }
 
@@ -194,7 +207,7 @@ impl<S: SpectralMode> LightVertex<S> {
             if data.shading_normal == data.normal { normal } else { octahedral::encode(data.shading_normal) };
         Self {
             record,
-            material: data.material,
+            material: data.material.min(MAX_MATERIAL),
             normal,
             shading_normal,
             texture: match (data.attribute, data.tangent) {
@@ -205,10 +218,50 @@ impl<S: SpectralMode> LightVertex<S> {
         }
     }
 
-    /// Material index.
+    /// Material index (meaningless for a medium vertex, see [`LightVertex::medium`]).
     #[inline]
     pub fn material(&self) -> u32 {
         self.material
+    }
+
+    /// A vertex in medium `medium` (a volume vertex): position, throughput, MIS quantities,
+    /// path length, fixed direction, continuation probability and termination flag as
+    /// [`VertexData`] has them; no material, normals or texture coordinates.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new_in_medium(
+        position: Vec3,
+        throughput: S,
+        mis: SubPathMis,
+        path_length: u32,
+        medium: u32,
+        fixed: Vec3,
+        continuation: f32,
+        terminated: bool,
+    ) -> Self {
+        let mut vertex = Self::new(&VertexData {
+            position,
+            throughput,
+            mis,
+            path_length,
+            material: 0,
+            normal: fixed,
+            shading_normal: fixed,
+            uv: Vec2::ZERO,
+            tangent: None,
+            attribute: None,
+            fixed,
+            continuation: continuation.min(1.0),
+            terminated,
+        });
+        vertex.material = MEDIUM_VERTEX | (medium & MAX_MATERIAL);
+        vertex.record.packed |= IN_MEDIUM;
+        vertex
+    }
+
+    /// The medium index of a medium vertex, `None` on a surface.
+    #[inline]
+    pub fn medium(&self) -> Option<u32> {
+        (self.material & MEDIUM_VERTEX != 0).then_some(self.material & MAX_MATERIAL)
     }
 
     /// Texture coordinates (meaningless when the material reads a mesh attribute; for an
@@ -221,6 +274,9 @@ impl<S: SpectralMode> LightVertex<S> {
     /// Rebuilds the vertex's BSDF (importance transport) at the hero wavelength `hero`.
     #[inline]
     pub fn bsdf(&self, scene: &Scene, hero: Option<f32>) -> Option<Bsdf> {
+        if self.medium().is_some() {
+            return None;
+        }
         let material = self.material;
         let shading_normal = octahedral::decode(self.shading_normal);
         let (uv, attribute, tangent) = if scene.material_reads_mesh_attribute(material) {
@@ -240,7 +296,8 @@ impl<S: SpectralMode> LightVertex<S> {
     /// The vertex's fluorescence, if its material is fluorescent.
     #[inline]
     pub fn fluorescent<'s>(&self, scene: &'s Scene) -> Option<crate::fluorescent::FluorescentVertex<'s>> {
-        crate::fluorescent::FluorescentVertex::at(&scene.materials[self.material as usize], self.uv())
+        let material = scene.materials.get(self.material as usize)?;
+        crate::fluorescent::FluorescentVertex::at(material, self.uv())
     }
 }
 
@@ -499,6 +556,20 @@ mod tests {
         let r = v.record;
         assert_eq!((v.material(), r.path_length(), r.terminated()), (MAX_MATERIAL, MAX_PATH_LENGTH, false));
         assert_eq!(r.continuation(), 0.75);
+        assert!(v.medium().is_none() && !r.in_medium(), "a saturated material is no medium vertex");
+    }
+
+    #[test]
+    fn medium_vertices_keep_their_flag_medium_and_continuation() {
+        for (i, continuation) in [0.0f32, 0.3, 0.999_99, 1.0].into_iter().enumerate() {
+            let d = data(i as u32);
+            let v = LightVertex::new_in_medium(d.position, d.throughput, d.mis, 7, 3, d.fixed, continuation, true);
+            let r = &v.record;
+            assert_eq!((v.medium(), r.in_medium(), r.path_length(), r.terminated()), (Some(3), true, 7, true));
+            assert!((r.continuation() - continuation).abs() <= continuation * 6.2e-5, "{continuation}");
+            assert!(r.fixed().angle_between(d.fixed) < octahedral::MAX_ANGULAR_ERROR);
+            assert!(!LightVertex::new(&d).record.in_medium());
+        }
     }
 
     /// Continuation probabilities come back within the documented relative error 2⁻¹⁴, 0 and 1

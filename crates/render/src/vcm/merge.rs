@@ -2,11 +2,11 @@
 //! merging radius, each MIS-weighted (eqs. 38, 39).
 
 use math::Vec3;
-use scene::Bsdf;
 use spectrum::{Rgb, SpectralMode};
 
 use super::connect::CameraEnd;
 use super::light_vertex::{LightVertex, MergeRecord};
+use super::medium::Scatterer;
 use super::mis::{self, MisConstants};
 use super::subpath::SubPath;
 use super::technique_images::Record;
@@ -121,10 +121,10 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
     rng: &mut Rng,
     out: &mut R,
 ) -> Rgb {
-    let (bsdf, position): (&Bsdf, Vec3) = (end.bsdf, end.position);
+    let (scatterer, position): (&Scatterer, Vec3) = (&end.scatterer, end.position);
     // One label for the camera vertex, shared by all its merges.
     let label = end.fluorescent.map(|f| (f, f.sample_label::<S>(rng.uniform())));
-    let continuation = bsdf.continuation_probability();
+    let continuation = scatterer.continuation();
     let grid = source.grid;
     let normalization = match source.scope {
         MergeScope::Group(group) => k.vm_normalization * group.normalization_scale,
@@ -137,21 +137,25 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
         if light.path_length() + camera.path_length > max_length {
             return None;
         }
-        let eval = bsdf.evaluate(light.fixed())?;
+        // Surface vertices merge with surface vertices, medium vertices with medium vertices.
+        if light.in_medium() != scatterer.is_medium() {
+            return None;
+        }
+        let eval = scatterer.evaluate(light.fixed())?;
         let weight = match weighting {
             MergeWeighting::None => 1.0,
             MergeWeighting::Mis => {
                 let light_mis = light.mis(k);
                 // The reverse density belongs to the camera BSDF, but the light sub-path's
                 // Russian roulette would have governed it.
-                let forward = eval.pdf.forward.0 * continuation;
-                let reverse = eval.pdf.reverse.0 * light.continuation();
+                let forward = eval.forward * continuation;
+                let reverse = eval.reverse * light.continuation();
                 mis::merge_weight(&light_mis, &camera.mis, forward, reverse, k)
             }
         };
         let weight = if camera.terminated && light.terminated() { weight * S::DOUBLE_TERMINATION } else { weight };
         let scattered = match label {
-            None => S::from_reflectance(w, eval.value) * light.throughput,
+            None => scatterer.spectral::<S>(w, eval.value) * light.throughput,
             Some((f, label)) => f.apply_slots(w, label, eval.value, light.throughput),
         };
         Some(scattered * weight)

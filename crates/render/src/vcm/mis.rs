@@ -137,6 +137,21 @@ impl SubPathMis {
         self.c_vm *= inv_cos;
     }
 
+    /// Folds the free-flight products of the segment just traced into the quantities (after
+    /// [`SubPathMis::arrive`], or alone for a ray that escaped): `forward` multiplies the
+    /// forward density of reaching the vertex, `reverse` the density of sampling the previous
+    /// vertex from it (`super::medium`; both 1 in vacuum). dVCM = 1/p→ gets `1/forward`; dVC,
+    /// dVM, cVC, cVM carry the ratio of the reverse to the forward conversion
+    /// (eqs. 34–36) and get `reverse/forward`.
+    pub fn apply_flight(&mut self, forward: f32, reverse: f32) {
+        let ratio = reverse / forward;
+        self.d_vcm /= forward;
+        self.d_vc *= ratio;
+        self.d_vm *= ratio;
+        self.c_vc *= ratio;
+        self.c_vm *= ratio;
+    }
+
     /// Starts the quantities of the next vertex after the walk sampled a direction with
     /// solid-angle pdfs `forward` and `reverse` (Russian roulette included) and cosine
     /// `cos_generated` at this vertex (eqs. 34–36; 53–55 for a specular event, whose forward and

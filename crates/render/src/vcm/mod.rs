@@ -39,6 +39,7 @@ pub mod camera_pass;
 pub mod connect;
 pub mod light_pass;
 pub mod light_vertex;
+pub mod medium;
 pub mod memory;
 pub mod merge;
 pub mod mis;
@@ -764,9 +765,13 @@ impl<S: SpectralMode> Engine<S> {
 
 /// Whether the camera sub-paths of `scene` merge with the light vertices of all `groups`
 /// wavelength groups (`super::wavelengths`, "Merging across groups"): only where no material is
-/// dispersive or fluorescent, and for at most [`wavelengths::MAX_CROSS_GROUPS`] groups.
+/// dispersive or fluorescent, in scenes without media (free flights are not re-weighted at other
+/// wavelengths), and for at most [`wavelengths::MAX_CROSS_GROUPS`] groups.
 fn merges_across_groups(scene: &Scene, groups: u32) -> bool {
-    groups as usize <= wavelengths::MAX_CROSS_GROUPS && !scene.has_fluorescence() && !scene.has_dispersion()
+    groups as usize <= wavelengths::MAX_CROSS_GROUPS
+        && !scene.has_fluorescence()
+        && !scene.has_dispersion()
+        && !scene.media.is_active()
 }
 
 /// The merge scope of each pixel of one iteration.

@@ -2,10 +2,12 @@
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::Bsdf;
+use scene::medium::Medium;
 use spectrum::{Rgb, SpectralMode};
 
 use crate::fluorescent::{FluorescentVertex, view};
 
+use super::medium::Flight;
 use super::mis::{MisConstants, SubPathMis};
 
 /// A sub-path being traced, carrying `S` ([`spectrum::Rgb`] or [`spectrum::Hero4`]).
@@ -36,6 +38,9 @@ pub struct SubPath<S: SpectralMode> {
     /// Camera sub-paths: the wavelength slot of each channel (moved by fluorescent shifts; the
     /// identity for light sub-paths, whose throughput is indexed by slot).
     pub slots: S::Slots,
+    /// The free-flight state of the segment being traced (`super::medium`; vacuum in
+    /// surface-only scenes).
+    pub flight: Flight,
 }
 
 impl<S: SpectralMode> SubPath<S> {
@@ -99,6 +104,40 @@ impl<S: SpectralMode> SubPath<S> {
         self.origin_offset = RAY_EPSILON;
         self.path_length += 1;
         Some(Scattered { value: sample.value, scale })
+    }
+}
+
+impl<S: SpectralMode> SubPath<S> {
+    /// Scatters at a medium vertex at `position` in `medium` (index `index`): samples the phase
+    /// function (weight f/p = 1), applies Russian roulette with the medium's largest albedo,
+    /// updates the MIS quantities (eqs. 34–36 with no cosines: a medium vertex has none) and
+    /// starts the next segment in the same medium. Returns false when the walk ends.
+    pub fn scatter_medium(
+        &mut self,
+        medium: &Medium,
+        index: u32,
+        position: Vec3,
+        rng: &mut Rng,
+        k: &MisConstants,
+    ) -> bool {
+        let fixed = -self.ray.direction;
+        let sample = medium.phase.sample(fixed, rng.uniform2());
+        let continuation = medium.max_albedo();
+        if continuation < 1.0 && rng.uniform() >= continuation {
+            return false;
+        }
+        if sample.pdf.is_nan() || sample.pdf <= 0.0 {
+            return false;
+        }
+        let pdf = sample.pdf * continuation;
+        self.mis.scatter(1.0, pdf, pdf, false, k);
+        self.throughput *= 1.0 / continuation;
+        self.specular_path = false;
+        self.ray = Ray::new(position, sample.direction);
+        self.origin_offset = 0.0;
+        self.flight = Flight::start(Some(index), true, 0.0);
+        self.path_length += 1;
+        true
     }
 }
 

@@ -1,0 +1,341 @@
+//! Homogeneous participating media in the VCM engine: free flights of the sub-paths, the
+//! transmittance and free-flight densities of connection segments, and the scattering
+//! "BSDF" of a medium vertex (the phase function).
+//!
+//! **A deterministic free-flight density per event.** Every technique must evaluate the same
+//! density for a sampling decision, forward and reverse, so that the MIS weights of a path sum
+//! to 1. A segment between two vertices is cut into *pieces* by the index-matched (null)
+//! boundaries it crosses; each piece lies in one medium (or in vacuum). One free-flight event
+//! samples one piece of length `ℓ` in a medium with extinction `σ_t`: a channel `c` of the
+//! medium's **linear-sRGB** extinction is picked uniformly, then `t ∝ σ_t,c e^{−σ_t,c t}`, so
+//! the event has the channel-mixture densities
+//!
+//! - scattering at `t < ℓ`: `D(t) = mean_c σ_t,c e^{−σ_t,c t}` (per unit length),
+//! - passing the piece: `P(ℓ) = mean_c e^{−σ_t,c ℓ}` (a probability),
+//!
+//! and the sub-path's throughput is multiplied by `σ_s(t) e^{−σ_t t} / D(t)` or
+//! `e^{−σ_t ℓ} / P(ℓ)` per channel of the path's spectrum. The densities use the RGB
+//! coefficients in spectral mode too: they are then the same for every wavelength set, so a
+//! light vertex and a camera vertex of different wavelength groups agree on them. (A medium
+//! whose RGB extinction is zero but whose spectrum is not is never sampled; no loader makes one.)
+//! In vacuum a piece is passed with probability 1.
+//!
+//! **Measures.** A surface vertex is reached with a density per unit *area*; a medium vertex
+//! with a density per unit *volume* (Veach 1997 §8.2 area–product measure extended to volumes,
+//! as in Georgiev's and Křivánek et al.'s path formulation). Converting a solid-angle density
+//! `p_ω` at `x` to the measure at `y` over a segment of pieces `1..n`:
+//! `p(y) = p_ω · Π_{k<n} P_k · E_n / ‖x − y‖²` with `E_n = P_n |cos θ_y|` at a surface and
+//! `E_n = D_n` in a medium (no cosine). The reverse conversion (sampling `x` from `y`) takes the
+//! pieces the other way: `Π_{k>1} P_k · E_1`. [`Flight`] accumulates these two products
+//! without the cosines (`forward`, `reverse`) while a sub-path traces a segment;
+//! [`super::mis::SubPathMis::apply_flight`] folds them into dVCM, dVC, dVM (tech. rep. eqs.
+//! 31–36 with `g = cos/d²` replaced by the conversions above; the cosines and distances are
+//! applied as before). [`segment`] evaluates the same products for a connection.
+//!
+//! **Medium vertices** scatter with the phase function: value = solid-angle pdf, the reverse pdf
+//! equals the forward one, no cosines; Russian roulette continues with the medium's largest
+//! RGB albedo ([`scene::medium::Medium::max_albedo`]), as the path tracer's albedo rule does.
+//!
+//! **The medium a light sub-path starts in** is read from the first surface its ray meets: the
+//! medium on the side the ray arrives from when that surface has an interface; else (no
+//! interface, or no surface at all) the camera's medium for a finite light and vacuum for an
+//! infinite one, whose rays start outside the scene's bounding sphere. (Taking the camera's
+//! medium for an infinite light's ray that meets nothing scattered its photons in the vacuum
+//! around a medium sphere holding the camera: +1.7 % on the camera-inside furnace.)
+
+use math::{RAY_EPSILON, Ray, Rng, Vec3};
+use scene::medium::{Medium, MediumInterface, transmittance};
+use scene::{Bsdf, Scene, SurfaceHit};
+use spectrum::{Rgb, SpectralMode};
+
+/// `mean_c e^{−σ_t,c ℓ}` over the RGB channels: the probability that a free flight passes a
+/// piece of length `ℓ` (scene units; may be infinite).
+#[inline]
+pub fn pass_probability(sigma_t: Rgb, length: f32) -> f32 {
+    let p = |s: f32| if s <= 0.0 { 1.0 } else { (-s * length).exp() };
+    (p(sigma_t.r) + p(sigma_t.g) + p(sigma_t.b)) / 3.0
+}
+
+/// `mean_c σ_t,c e^{−σ_t,c t}` over the RGB channels: the density (per unit length) of a free
+/// flight scattering at distance `t` from the start of its piece.
+#[inline]
+pub fn flight_density(sigma_t: Rgb, t: f32) -> f32 {
+    let d = |s: f32| if s <= 0.0 { 0.0 } else { s * (-s * t).exp() };
+    (d(sigma_t.r) + d(sigma_t.g) + d(sigma_t.b)) / 3.0
+}
+
+/// The free-flight state of a sub-path on the segment it is tracing (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Flight {
+    /// The medium the ray travels in (`None` = vacuum).
+    pub medium: Option<u32>,
+    /// The medium is not known yet (a light sub-path's first segment): read it from the first
+    /// surface hit.
+    pub unresolved: bool,
+    /// The medium of an unresolved segment whose first surface has no interface, or that
+    /// meets no surface: the camera's medium for finite lights, vacuum for infinite ones (whose
+    /// rays start outside the scene's bounding sphere).
+    pub fallback: Option<u32>,
+    /// `Π P_k · E_n` of the pieces finished so far, forward (unitless or per unit length).
+    pub forward: f32,
+    /// `Π P_k · E_1` of the pieces finished so far, reverse.
+    pub reverse: f32,
+    /// No piece of this segment is finished yet.
+    pub first: bool,
+    /// The segment starts at a medium vertex (its first piece's reverse factor is `D_1`).
+    pub from_medium: bool,
+    /// Distance from the start of the current piece to the ray origin (the offset of a ray
+    /// leaving a surface or crossing a boundary).
+    pub gap: f32,
+}
+
+impl Flight {
+    /// A segment starting in `medium`, at a medium vertex when `from_medium`, with the ray
+    /// origin `gap` past the vertex.
+    pub fn start(medium: Option<u32>, from_medium: bool, gap: f32) -> Self {
+        Flight { medium, unresolved: false, fallback: None, forward: 1.0, reverse: 1.0, first: true, from_medium, gap }
+    }
+
+    /// Ends a piece with pass probability `pass` and density `density` at its end; `scattered`
+    /// when the segment ends there at a medium vertex.
+    #[inline]
+    fn end_piece(&mut self, pass: f32, density: f32, scattered: bool) {
+        self.forward *= if scattered { density } else { pass };
+        self.reverse *= if self.first && self.from_medium { density } else { pass };
+        self.first = false;
+    }
+}
+
+/// Where a sub-path's ray ended.
+#[derive(Clone, Copy, Debug)]
+pub enum Arrival {
+    /// A surface that is not an index-matched boundary.
+    Surface(SurfaceHit),
+    /// A scattering event in medium `medium` at `distance` along the current ray.
+    Medium {
+        /// Position of the vertex.
+        position: Vec3,
+        /// Distance from the ray origin (scene units).
+        distance: f32,
+        /// The medium's index.
+        medium: u32,
+    },
+    /// Nothing: the ray left the scene.
+    Escaped,
+}
+
+/// Traces `ray` to its next vertex: samples free flights in the media it crosses, passes
+/// index-matched boundaries (moving `ray` and adding the distance to `origin_offset`, the
+/// distance of the ray origin from the last vertex) and multiplies `throughput` by the
+/// free-flight weights. Draws no random numbers in vacuum, so surface-only scenes consume
+/// exactly the numbers they did before.
+pub fn advance<S: SpectralMode>(
+    scene: &Scene,
+    ray: &mut Ray,
+    origin_offset: &mut f32,
+    flight: &mut Flight,
+    throughput: &mut S,
+    rng: &mut Rng,
+    w: &S::Wavelengths,
+) -> Arrival {
+    let media = &scene.media;
+    loop {
+        let hit = scene.intersect(ray);
+        if flight.unresolved {
+            flight.unresolved = false;
+            let arriving = -ray.direction;
+            flight.medium = hit
+                .as_ref()
+                .and_then(|h| media.interface(h.primitive).map(|i| i.medium_towards(arriving, h.normal)))
+                .unwrap_or(flight.fallback);
+        }
+        let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.distance);
+        let length = t_max + flight.gap;
+        if let Some(index) = flight.medium {
+            let m = media.medium(index);
+            let rgb = m.coefficients::<Rgb>(&()).sigma_t;
+            let channel = ((rng.uniform() * 3.0) as usize).min(2);
+            let sigma = rgb.channel(channel);
+            let u = rng.uniform();
+            let t = if sigma > 0.0 { -(1.0 - u).ln() / sigma } else { f32::INFINITY };
+            let c = m.coefficients::<S>(w);
+            if t < length {
+                let density = flight_density(rgb, t);
+                flight.end_piece(pass_probability(rgb, t), density, true);
+                *throughput *= c.sigma_s * transmittance(c.sigma_t, t) * (1.0 / density);
+                let distance = (t - flight.gap).max(0.0);
+                return Arrival::Medium { position: ray.at(distance), distance, medium: index };
+            }
+            let pass = pass_probability(rgb, length);
+            // (The density at the piece's far end is the reverse flight's, from a medium vertex.)
+            flight.end_piece(pass, flight_density(rgb, length), false);
+            *throughput *= if pass > 0.0 { transmittance(c.sigma_t, length) * (1.0 / pass) } else { S::default() };
+        } else {
+            flight.end_piece(1.0, 0.0, false);
+        }
+        let Some(hit) = hit else { return Arrival::Escaped };
+        if !media.is_null(hit.material) {
+            return Arrival::Surface(hit);
+        }
+        if let Some(i) = media.interface(hit.primitive) {
+            flight.medium = i.medium_towards(ray.direction, hit.normal);
+        }
+        *origin_offset += hit.distance + RAY_EPSILON;
+        *ray = Ray::new(hit.position + RAY_EPSILON * ray.direction, ray.direction);
+        flight.gap = RAY_EPSILON;
+    }
+}
+
+/// What a connection segment carries: the transmittance per channel and the free-flight
+/// products of its pieces (module doc), `forward` for sampling its end from its start and
+/// `reverse` for sampling its start from its end (without cosines).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment<S> {
+    /// Beer–Lambert transmittance of the media along the segment, per channel.
+    pub transmittance: S,
+    /// `Π_{k<n} P_k · (D_n or P_n)`.
+    pub forward: f32,
+    /// `Π_{k>1} P_k · (D_1 or P_1)`.
+    pub reverse: f32,
+}
+
+/// The segment from `point` along unit `direction` over `distance` (may be infinite),
+/// starting in `medium`; `from_medium` / `to_medium` say whether its ends are medium vertices.
+/// `None` when a surface that is not an index-matched boundary blocks it (over the open
+/// interval `(ε, distance − ε)`, as [`Scene::occluded`]) or nothing gets through.
+#[allow(clippy::too_many_arguments)]
+pub fn segment<S: SpectralMode>(
+    scene: &Scene,
+    point: Vec3,
+    direction: Vec3,
+    distance: f32,
+    medium: Option<u32>,
+    from_medium: bool,
+    to_medium: bool,
+    w: &S::Wavelengths,
+) -> Option<Segment<S>> {
+    let media = &scene.media;
+    let mut medium = medium;
+    let mut carried = S::splat(1.0);
+    let (mut forward, mut reverse, mut first) = (1.0f32, 1.0f32, true);
+    let (mut crossed, mut offset) = (0.0f32, RAY_EPSILON);
+    loop {
+        let remaining = distance - offset - RAY_EPSILON;
+        let ray = Ray::new(point + offset * direction, direction);
+        let hit = if remaining > 0.0 { scene.intersect(&ray).filter(|h| h.distance < remaining) } else { None };
+        let end = hit.as_ref().map_or(distance, |h| offset + h.distance);
+        let last = hit.is_none();
+        if let Some(index) = medium {
+            let m: &Medium = media.medium(index);
+            let rgb = m.coefficients::<Rgb>(&()).sigma_t;
+            let length = end - crossed;
+            carried *= transmittance(m.coefficients::<S>(w).sigma_t, length);
+            let (pass, density) = (pass_probability(rgb, length), flight_density(rgb, length));
+            forward *= if last && to_medium { density } else { pass };
+            reverse *= if first && from_medium { density } else { pass };
+        }
+        first = false;
+        let Some(hit) = hit else { break };
+        if !media.is_null(hit.material) {
+            return None;
+        }
+        if let Some(i) = media.interface(hit.primitive) {
+            medium = i.medium_towards(direction, hit.normal);
+        }
+        crossed = end;
+        offset = end + RAY_EPSILON;
+    }
+    (!carried.is_black()).then_some(Segment { transmittance: carried, forward, reverse })
+}
+
+/// The media around a vertex: the medium a segment leaving it along a direction starts in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MediumSide {
+    /// The medium the arriving ray travelled in.
+    pub current: Option<u32>,
+    /// The interface of the surface, if any (`None` at medium vertices).
+    pub interface: Option<MediumInterface>,
+    /// Geometric normal of the surface (unused without an interface).
+    pub normal: Vec3,
+}
+
+impl MediumSide {
+    /// Inside medium `medium` (a medium vertex, or a camera/light in a medium).
+    pub fn inside(medium: Option<u32>) -> Self {
+        MediumSide { current: medium, interface: None, normal: Vec3::ZERO }
+    }
+
+    /// At surface `hit` reached through `current`.
+    pub fn at_surface(scene: &Scene, hit: &SurfaceHit, current: Option<u32>) -> Self {
+        MediumSide { current, interface: scene.media.interface(hit.primitive), normal: hit.normal }
+    }
+
+    /// The medium a ray leaving along `direction` travels in.
+    #[inline]
+    pub fn towards(&self, direction: Vec3) -> Option<u32> {
+        self.interface.map_or(self.current, |i| i.medium_towards(direction, self.normal))
+    }
+}
+
+/// A scattering vertex's local model: a surface BSDF or a medium's phase function.
+#[derive(Clone, Copy)]
+pub enum Scatterer<'a> {
+    /// A surface vertex.
+    Surface(&'a Bsdf),
+    /// A medium vertex: the medium and its fixed direction (towards the previous vertex).
+    Medium(&'a Medium, Vec3),
+}
+
+/// [`Scatterer::evaluate`]'s result.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScatterEval {
+    /// BSDF value (1/sr, linear sRGB), or the phase value in every channel.
+    pub value: Rgb,
+    /// `|cos|` of the generated direction at a surface, 1 in a medium.
+    pub cos_generated: f32,
+    /// Solid-angle pdf of generating the direction (Russian roulette not included).
+    pub forward: f32,
+    /// Solid-angle pdf of the reverse (Russian roulette not included).
+    pub reverse: f32,
+}
+
+impl Scatterer<'_> {
+    /// Value and pdfs for the unit generated direction, `None` when zero.
+    pub fn evaluate(&self, generated: Vec3) -> Option<ScatterEval> {
+        match self {
+            Scatterer::Surface(bsdf) => bsdf.evaluate(generated).map(|e| ScatterEval {
+                value: e.value,
+                cos_generated: e.cos_generated,
+                forward: e.pdf.forward.0,
+                reverse: e.pdf.reverse.0,
+            }),
+            Scatterer::Medium(m, fixed) => {
+                let p = m.phase.evaluate(*fixed, generated);
+                (p > 0.0).then_some(ScatterEval { value: Rgb::splat(p), cos_generated: 1.0, forward: p, reverse: p })
+            }
+        }
+    }
+
+    /// The Russian-roulette continuation probability.
+    pub fn continuation(&self) -> f32 {
+        match self {
+            Scatterer::Surface(bsdf) => bsdf.continuation_probability(),
+            Scatterer::Medium(m, _) => m.max_albedo(),
+        }
+    }
+
+    /// Whether this is a medium vertex.
+    pub fn is_medium(&self) -> bool {
+        matches!(self, Scatterer::Medium(..))
+    }
+
+    /// The evaluated value at wavelengths `w`: the BSDF upsampled as a reflectance, the phase
+    /// value as is (it may exceed 1).
+    #[inline]
+    pub fn spectral<S: SpectralMode>(&self, w: &S::Wavelengths, value: Rgb) -> S {
+        match self {
+            Scatterer::Surface(_) => S::from_reflectance(w, value),
+            Scatterer::Medium(..) => S::splat(value.r),
+        }
+    }
+}
