@@ -80,7 +80,12 @@ fn mitsuba_media_interfaces_sensor_and_null() {
 #[test]
 fn mitsuba_unsupported_media_are_errors() {
     let cases = [
-        (r#"<medium type="heterogeneous" id="m"/>"#, "heterogeneous"),
+        (r#"<medium type="heterogeneous" id="m"><volume type="procedural" name="sigma_t"/></medium>"#, "procedural"),
+        (
+            r#"<medium type="heterogeneous" id="m"><volume type="gridvolume" name="albedo"><string name="filename" value="none.vol"/></volume></medium>"#,
+            "none.vol",
+        ),
+        (r#"<medium type="checkerboard" id="m"/>"#, "checkerboard"),
         (r#"<medium type="homogeneous" id="m"><phase type="rayleigh"/></medium>"#, "rayleigh"),
         (r#"<medium type="homogeneous" id="m"><volume type="gridvolume" name="sigma_t"/></medium>"#, "volume data"),
         (r#"<medium type="homogeneous" id="m"><rgb name="albedo" value="1.5"/></medium>"#, "albedo"),

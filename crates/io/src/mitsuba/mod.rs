@@ -44,6 +44,7 @@ mod sensor;
 mod shape;
 mod textured;
 mod transform;
+mod volume;
 mod xml;
 
 use std::collections::{HashMap, HashSet};

@@ -56,6 +56,7 @@ mod alpha;
 mod coated;
 pub mod color;
 pub mod envmap;
+mod grid_medium;
 mod instancing;
 mod medium;
 mod parser;

@@ -1,0 +1,191 @@
+//! Heterogeneous media: delta tracking for free flights and ratio tracking for transmittance,
+//! against a grey (channel-independent) majorant, with the path-level spectral MIS of
+//! [`super::homogeneous`].
+//!
+//! **Coefficients.** `σ_t(p) = scale · sigma_t(p)` and `σ_s(p) = σ_t(p) · albedo(p)` (albedo
+//! clamped to [0, 1]), both [`Volume`]s, inside `region` (a box; Mitsuba's medium lives in
+//! the `sigma_t` volume's bounding box, pbrt-v4's grid in `p0`–`p1`); outside it the medium is
+//! empty. The majorant `σ̄ = scale · grid bound · max_j value_j` bounds `σ_t` in every channel.
+//!
+//! **Null-scattering formulation** (Miller, Georgiev and Jarosz 2019, "A null-scattering path
+//! integral formulation of light transport"): with `σ_n = σ̄ − σ_t`, tentative
+//! collisions are sampled with density `σ̄ e^{−σ̄ t}`, the same for every channel. At a
+//! collision at `x` the path's channel `c` takes a real scattering event with probability
+//! `σ_t,c(x) / σ̄` and a null event otherwise; a channel `j` would have taken the same event
+//! with probability `σ_t,j / σ̄` or `σ_n,j / σ̄`. The path contribution of the event is
+//! `T̄ σ_s(x)` (real) or `T̄ σ_n(x)` (null), its density under channel `j` `T̄ σ_t,j(x)` or
+//! `T̄ σ_n,j(x)`: the common `T̄ = e^{−σ̄ t}` cancels and each event is one factor `g` with
+//! densities `d` in the scheme of [`super::homogeneous`] (balance heuristic over the channel,
+//! `g / mean(q ⊙ d)`, `q ← q ⊙ d / mean(q ⊙ d)`): real `g = σ_s(x)`, `d = σ_t(x)`; null
+//! `g = d = σ_n(x)`. Passing the end of the segment has `g = d = T̄`, the same in every
+//! channel, and changes nothing. For a grey `σ_t` (one-channel density grid) every null
+//! event has weight 1 and a real event the albedo: plain delta tracking (Woodcock et al.
+//! 1965).
+//!
+//! **Ratio tracking** (Novák, Selle and Jarosz 2014, "Residual ratio tracking for estimating attenuation in participating media"): the transmittance along a segment
+//! is estimated by the product `Π (1 − σ_t(x_i) / σ̄)` over the tentative collisions `x_i`,
+//! unbiased per channel (the collisions do not depend on the channel).
+
+use glam::{Affine3A, Vec3};
+use math::Rng;
+use spectrum::SpectralMode;
+
+use super::DistanceSample;
+use super::grid::Volume;
+
+/// The spatially varying coefficients of a heterogeneous medium.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Heterogeneous {
+    /// Extinction σ_t per scene unit before the medium's `scale`.
+    pub sigma_t: Volume,
+    /// Single-scattering albedo in [0, 1].
+    pub albedo: Volume,
+    /// World → the unit cube of the box the medium fills (empty outside).
+    pub region: Affine3A,
+}
+
+/// A heterogeneous medium prepared for a path's wavelengths.
+#[derive(Clone, Copy, Debug)]
+pub struct Tracker<'a, S: SpectralMode> {
+    medium: &'a Heterogeneous,
+    /// `scale · sigma_t.value` at the wavelengths.
+    sigma_t_tint: S,
+    /// `albedo.value` at the wavelengths.
+    albedo_tint: S,
+    /// σ̄, per scene unit.
+    majorant: f32,
+}
+
+impl Heterogeneous {
+    /// The medium at the wavelengths `w`, with the medium's `scale`.
+    pub fn tracker<'a, S: SpectralMode>(&'a self, scale: f32, w: &S::Wavelengths) -> Tracker<'a, S> {
+        let sigma_t_tint = self.sigma_t.value.eval::<S>(w, false) * scale;
+        let albedo_tint = self.albedo.value.eval::<S>(w, true);
+        let value_max = (0..S::CHANNELS).map(|c| sigma_t_tint.channel(c)).fold(0.0, f32::max);
+        let majorant = value_max * self.sigma_t.grid_bound::<S>(w);
+        Tracker { medium: self, sigma_t_tint, albedo_tint, majorant }
+    }
+
+    /// The largest albedo over space and the RGB channels (unitless).
+    pub fn max_albedo(&self) -> f32 {
+        let tint = self.albedo.value.eval::<spectrum::Rgb>(&(), true).max_component();
+        (tint * self.albedo.grid_bound::<spectrum::Rgb>(&())).min(1.0)
+    }
+
+    /// The world-space box of the region (for checks and documentation).
+    pub fn region_bounds(&self) -> (Vec3, Vec3) {
+        super::grid::Volume::constant(super::Coefficient::rgb(spectrum::Rgb::splat(1.0)), self.region).world_bounds()
+    }
+}
+
+impl<S: SpectralMode> Tracker<'_, S> {
+    /// The majorant σ̄ (per scene unit).
+    pub fn majorant(&self) -> f32 {
+        self.majorant
+    }
+
+    /// σ_t and σ_s at world point `p` (per scene unit; zero outside the region).
+    #[inline]
+    pub fn coefficients(&self, p: Vec3, w: &S::Wavelengths) -> (S, S) {
+        let local = self.medium.region.transform_point3(p);
+        if !(local.cmpge(Vec3::ZERO).all() && local.cmple(Vec3::ONE).all()) {
+            return (S::default(), S::default());
+        }
+        let sigma_t = self.medium.sigma_t.eval::<S>(p, w, self.sigma_t_tint).map(|v| v.clamp(0.0, self.majorant));
+        let albedo = self.medium.albedo.eval::<S>(p, w, self.albedo_tint).map(|a| a.clamp(0.0, 1.0));
+        (sigma_t, sigma_t * albedo)
+    }
+
+    /// The parameter interval `[t0, t1]` of the ray `origin + t·direction`, `0 ≤ t ≤ t_max`,
+    /// inside the region, `None` when it misses (slab test in the region's unit cube; the
+    /// affine map keeps the ray parameter).
+    fn clip(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<(f32, f32)> {
+        let o = self.medium.region.transform_point3(origin);
+        let d = self.medium.region.transform_vector3(direction);
+        let (mut t0, mut t1) = (0.0f32, t_max);
+        for a in 0..3 {
+            if d[a] == 0.0 {
+                if !(0.0..=1.0).contains(&o[a]) {
+                    return None;
+                }
+                continue;
+            }
+            let (a0, a1) = ((0.0 - o[a]) / d[a], (1.0 - o[a]) / d[a]);
+            t0 = t0.max(a0.min(a1));
+            t1 = t1.min(a0.max(a1));
+        }
+        (t0 < t1 && self.majorant > 0.0).then_some((t0, t1))
+    }
+
+    /// Delta tracking along the ray from `origin` along unit `direction` up to `t_max` (may be
+    /// infinite) with the path's channel `channel` and density ratios `ratios` (updated);
+    /// module documentation. The distance is from `origin`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample_distance(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_max: f32,
+        channel: usize,
+        rng: &mut Rng,
+        ratios: &mut S,
+        w: &S::Wavelengths,
+    ) -> DistanceSample<S> {
+        let channel = channel.min(S::CHANNELS - 1);
+        let mut weight = S::splat(1.0);
+        let passed = |weight| DistanceSample { distance: t_max, scattered: false, weight };
+        let Some((t0, t1)) = self.clip(origin, direction, t_max) else { return passed(weight) };
+        let mut t = t0;
+        loop {
+            t -= (1.0 - rng.uniform()).ln() / self.majorant;
+            if t >= t1 {
+                return passed(weight);
+            }
+            let (sigma_t, sigma_s) = self.coefficients(origin + t * direction, w);
+            let real = rng.uniform() * self.majorant < sigma_t.channel(channel);
+            let (g, d) = if real {
+                (sigma_s, sigma_t)
+            } else {
+                let sigma_n = sigma_t.map(|s| self.majorant - s);
+                (sigma_n, sigma_n)
+            };
+            let weighted = *ratios * d;
+            let mean = (0..S::CHANNELS).map(|c| weighted.channel(c)).sum::<f32>() / S::CHANNELS as f32;
+            if !(mean > 0.0 && mean.is_finite()) {
+                return DistanceSample { distance: t, scattered: real, weight: S::default() };
+            }
+            *ratios = weighted * (1.0 / mean);
+            weight *= g * (1.0 / mean);
+            if real {
+                return DistanceSample { distance: t, scattered: true, weight };
+            }
+        }
+    }
+
+    /// Ratio-tracking estimate of the transmittance (per channel, unitless) of the segment from
+    /// `origin` along unit `direction` over `[t_min, t_max]` (module documentation).
+    pub fn transmittance(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_min: f32,
+        t_max: f32,
+        rng: &mut Rng,
+        w: &S::Wavelengths,
+    ) -> S {
+        let mut carried = S::splat(1.0);
+        let Some((t0, t1)) = self.clip(origin, direction, t_max) else { return carried };
+        let mut t = t0.max(t_min);
+        loop {
+            t -= (1.0 - rng.uniform()).ln() / self.majorant;
+            if t >= t1 {
+                return carried;
+            }
+            let (sigma_t, _) = self.coefficients(origin + t * direction, w);
+            carried *= sigma_t.map(|s| 1.0 - s / self.majorant);
+            if carried.is_black() {
+                return carried;
+            }
+        }
+    }
+}
