@@ -183,6 +183,26 @@ Shape "sphere"
 }
 
 #[test]
+fn pbrt_rgb_grid() {
+    let text = r#"WorldBegin
+MakeNamedMedium "fire" "string type" "rgbgrid" "integer nx" 2 "float scale" 2
+    "rgb sigma_a" [0 0 0  1 2 3] "rgb sigma_s" [1 1 1  3 2 1]
+MakeNamedMedium "default" "string type" "rgbgrid" "rgb sigma_s" [0.5 0.25 0]
+"#;
+    let desc = pbrt("pbrt_rgb", text).unwrap();
+    let m = &desc.media.media[0];
+    // Voxel centres at x = 0.25 and 0.75; the midpoint averages them: σ_a = (½, 1, 3/2),
+    // σ_s = (2, 3/2, 1), times scale 2.
+    let (t, s) = at(m, [0.5, 0.5, 0.5]);
+    assert!(close(t, [5.0, 5.0, 5.0]) && close(s, [4.0, 3.0, 2.0]), "{t:?} {s:?}");
+    let (t, s) = at(m, [0.25, 0.5, 0.5]);
+    assert!(close(t, [2.0; 3]) && close(s, [2.0; 3]), "{t:?} {s:?}");
+    // An absent grid is 1 everywhere (pbrt-v4).
+    let (t, s) = at(&desc.media.media[1], [0.5, 0.5, 0.5]);
+    assert!(close(t, [1.5, 1.25, 1.0]) && close(s, [0.5, 0.25, 0.0]), "{t:?} {s:?}");
+}
+
+#[test]
 fn pbrt_grid_errors_name_file_and_line() {
     let cases = [
         (r#"MakeNamedMedium "m" "string type" "uniformgrid" "integer nx" 2 "float density" [1]"#, "density values"),
@@ -190,7 +210,8 @@ fn pbrt_grid_errors_name_file_and_line() {
         (r#"MakeNamedMedium "m" "string type" "uniformgrid" "float density" [1] "rgb Le" [1 1 1]"#, "Le"),
         (r#"MakeNamedMedium "m" "string type" "uniformgrid" "float density" [-1]"#, "non-negative"),
         (r#"MakeNamedMedium "m" "string type" "uniformgrid" "float density" [1] "point3 p1" [0 1 1]"#, "empty"),
-        (r#"MakeNamedMedium "m" "string type" "rgbgrid""#, "rgbgrid"),
+        (r#"MakeNamedMedium "m" "string type" "rgbgrid" "integer nx" 2 "rgb sigma_s" [1 1 1]"#, "rgb values"),
+        (r#"MakeNamedMedium "m" "string type" "nanovdb""#, "nanovdb"),
     ];
     for (index, (line, needle)) in cases.iter().enumerate() {
         let error = pbrt(&format!("pbrt_err{index}"), &format!("WorldBegin\n{line}\n"))

@@ -82,7 +82,7 @@ fn ramp_medium(n: usize, tint: Option<Rgb>, scale: f32) -> Medium {
         outside: Outside::Clamp,
     };
     let albedo = Volume::constant(Coefficient::rgb(Rgb::splat(0.5)), Affine3A::IDENTITY);
-    let h = Heterogeneous { sigma_t, albedo, region: Affine3A::IDENTITY };
+    let h = Heterogeneous { sigma_t, albedo, sigma_s: None, region: Affine3A::IDENTITY };
     Medium { coefficients: Coefficients::Heterogeneous(Arc::new(h)), scale, phase: PhaseFunction::Isotropic }
 }
 
@@ -174,8 +174,9 @@ fn sphere_scene(medium: Medium) -> Scene {
     Scene::from_description(&desc, None).unwrap().0
 }
 
-/// A chromatic 4×4×4 grid (values 0.2 … 4.1, varying per channel) over [−1, 1]³, albedo 1.
-fn furnace_medium() -> Medium {
+/// A chromatic 4×4×4 grid (values 0.2 … 4.1, varying per channel) over [−1, 1]³, albedo 1
+/// (or, with `direct_sigma_s`, σ_s given as the same grid, as pbrt's `rgbgrid` does).
+fn furnace_medium(direct_sigma_s: bool) -> Medium {
     let values: Vec<f32> = (0..64)
         .flat_map(|i| {
             let v = 0.2 + ((i * 37) % 64) as f32 / 16.0;
@@ -191,7 +192,8 @@ fn furnace_medium() -> Medium {
         outside: Outside::Clamp,
     };
     let albedo = Volume::constant(Coefficient::rgb(Rgb::splat(1.0)), Affine3A::IDENTITY);
-    let h = Heterogeneous { sigma_t, albedo, region: to_world.inverse() };
+    let sigma_s = direct_sigma_s.then(|| sigma_t.clone());
+    let h = Heterogeneous { sigma_t, albedo, sigma_s, region: to_world.inverse() };
     Medium {
         coefficients: Coefficients::Heterogeneous(Arc::new(h)),
         scale: 1.5,
@@ -201,9 +203,9 @@ fn furnace_medium() -> Medium {
 
 #[test]
 fn heterogeneous_furnace_conserves_energy() {
-    let scene = sphere_scene(furnace_medium());
-    assert!(scene.media.has_heterogeneous());
-    for spectral in [false, true] {
+    for (direct, spectral) in [(false, false), (false, true), (true, false)] {
+        let scene = sphere_scene(furnace_medium(direct));
+        assert!(scene.media.has_heterogeneous());
         let tracer = PathTracer { spectral, ..PathTracer::new(u32::MAX) };
         let mut stats = Stats::new();
         for i in 0..200_000 {
@@ -215,6 +217,6 @@ fn heterogeneous_furnace_conserves_energy() {
             let estimate = tracer.radiance(&scene, ray, &mut rng);
             stats.add(estimate.to_array(), [1.0; 3], 1.03);
         }
-        stats.check(if spectral { "heterogeneous furnace, spectral" } else { "heterogeneous furnace, RGB" });
+        stats.check(&format!("heterogeneous furnace, spectral {spectral}, direct σ_s {direct}"));
     }
 }

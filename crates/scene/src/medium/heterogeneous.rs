@@ -3,7 +3,7 @@
 //! [`super::homogeneous`].
 //!
 //! **Coefficients.** `σ_t(p) = scale · sigma_t(p)` and `σ_s(p) = σ_t(p) · albedo(p)` (albedo
-//! clamped to [0, 1]), both [`Volume`]s, inside `region` (a box; Mitsuba's medium lives in
+//! clamped to [0, 1]), both [`Volume`]s (or `σ_s(p) = scale · sigma_s(p)` when given directly), inside `region` (a box; Mitsuba's medium lives in
 //! the `sigma_t` volume's bounding box, pbrt-v4's grid in `p0`–`p1`); outside it the medium is
 //! empty. The majorant `σ̄ = scale · grid bound · max_j value_j` bounds `σ_t` in every channel.
 //!
@@ -38,8 +38,12 @@ use super::grid::Volume;
 pub struct Heterogeneous {
     /// Extinction σ_t per scene unit before the medium's `scale`.
     pub sigma_t: Volume,
-    /// Single-scattering albedo in [0, 1].
+    /// Single-scattering albedo in [0, 1] (unused when `sigma_s` is given).
     pub albedo: Volume,
+    /// Scattering σ_s per scene unit before `scale`, when given directly (pbrt-v4's
+    /// `rgbgrid`); the builder keeps it at most `sigma_t` everywhere (e.g. `sigma_t` holds
+    /// `σ_a + σ_s` voxel by voxel: interpolation is linear).
+    pub sigma_s: Option<Volume>,
     /// World → the unit cube of the box the medium fills (empty outside).
     pub region: Affine3A,
 }
@@ -50,7 +54,7 @@ pub struct Tracker<'a, S: SpectralMode> {
     medium: &'a Heterogeneous,
     /// `scale · sigma_t.value` at the wavelengths.
     sigma_t_tint: S,
-    /// `albedo.value` at the wavelengths.
+    /// `albedo.value` at the wavelengths, or `scale · sigma_s.value`.
     albedo_tint: S,
     /// σ̄, per scene unit.
     majorant: f32,
@@ -60,7 +64,10 @@ impl Heterogeneous {
     /// The medium at the wavelengths `w`, with the medium's `scale`.
     pub fn tracker<'a, S: SpectralMode>(&'a self, scale: f32, w: &S::Wavelengths) -> Tracker<'a, S> {
         let sigma_t_tint = self.sigma_t.value.eval::<S>(w, false) * scale;
-        let albedo_tint = self.albedo.value.eval::<S>(w, true);
+        let albedo_tint = match &self.sigma_s {
+            Some(sigma_s) => sigma_s.value.eval::<S>(w, false) * scale,
+            None => self.albedo.value.eval::<S>(w, true),
+        };
         let value_max = (0..S::CHANNELS).map(|c| sigma_t_tint.channel(c)).fold(0.0, f32::max);
         let majorant = value_max * self.sigma_t.grid_bound::<S>(w);
         Tracker { medium: self, sigma_t_tint, albedo_tint, majorant }
@@ -68,6 +75,9 @@ impl Heterogeneous {
 
     /// The largest albedo over space and the RGB channels (unitless).
     pub fn max_albedo(&self) -> f32 {
+        if self.sigma_s.is_some() {
+            return 1.0;
+        }
         let tint = self.albedo.value.eval::<spectrum::Rgb>(&(), true).max_component();
         (tint * self.albedo.grid_bound::<spectrum::Rgb>(&())).min(1.0)
     }
@@ -92,6 +102,9 @@ impl<S: SpectralMode> Tracker<'_, S> {
             return (S::default(), S::default());
         }
         let sigma_t = self.medium.sigma_t.eval::<S>(p, w, self.sigma_t_tint).map(|v| v.clamp(0.0, self.majorant));
+        if let Some(sigma_s) = &self.medium.sigma_s {
+            return (sigma_t, sigma_s.eval::<S>(p, w, self.albedo_tint).map(|v| v.max(0.0)));
+        }
         let albedo = self.medium.albedo.eval::<S>(p, w, self.albedo_tint).map(|a| a.clamp(0.0, 1.0));
         (sigma_t, sigma_t * albedo)
     }
