@@ -1,6 +1,7 @@
 //! Heterogeneous (grid) media against closed forms:
 //!
-//! - ratio tracking and delta tracking through a linear density ramp (trilinear interpolation
+//! - ratio tracking and delta tracking (with the majorant grid and with the global majorant
+//!   only) through a linear density ramp (trilinear interpolation
 //!   of a grid whose values grow linearly along x is exactly linear between the first and last
 //!   voxel centres): the mean transmittance estimate, and the probability-weighted pass-through
 //!   of delta tracking with the spectral MIS on a chromatic grid, equal
@@ -67,7 +68,7 @@ impl Stats {
 
 /// A grid of `n` voxels along x (1 along y and z) with value `i` (times `tint` per channel
 /// when `tint` is given, as a 3-channel grid) at voxel `i`, on the world box [0, 1]³.
-fn ramp_medium(n: usize, tint: Option<Rgb>, scale: f32) -> Medium {
+fn ramp_medium(n: usize, tint: Option<Rgb>, scale: f32, majorant_grid: bool) -> Medium {
     let values: Vec<f32> = match tint {
         None => (0..n).map(|i| i as f32).collect(),
         Some(t) => (0..n).flat_map(|i| [i as f32 * t.r, i as f32 * t.g, i as f32 * t.b]).collect(),
@@ -82,7 +83,8 @@ fn ramp_medium(n: usize, tint: Option<Rgb>, scale: f32) -> Medium {
         outside: Outside::Clamp,
     };
     let albedo = Volume::constant(Coefficient::rgb(Rgb::splat(0.5)), Affine3A::IDENTITY);
-    let h = Heterogeneous { sigma_t, albedo, sigma_s: None, region: Affine3A::IDENTITY };
+    let h = Heterogeneous::new(sigma_t, albedo, None, Affine3A::IDENTITY);
+    let h = if majorant_grid { h } else { h.without_majorant_grid() };
     Medium { coefficients: Coefficients::Heterogeneous(Arc::new(h)), scale, phase: PhaseFunction::Isotropic }
 }
 
@@ -95,24 +97,27 @@ fn ramp_transmittance(n: usize, a: f32, b: f32, k: f32, scale: f32) -> f32 {
 #[test]
 fn ratio_tracking_matches_the_analytic_transmittance() {
     let (n, scale) = (8, 0.4);
-    let medium = ramp_medium(n, None, scale);
-    let h = medium.heterogeneous().unwrap();
-    let tracker = h.tracker::<Rgb>(medium.scale, &());
-    assert_eq!(tracker.majorant(), 7.0 * scale);
-    // Along x at y = z = 0.5 from x = 0.1 to x = 0.9, inside the linear part [1/16, 15/16].
-    let (a, b) = (0.1, 0.9);
-    let truth = ramp_transmittance(n, a, b, 1.0, scale);
-    let origin = Vec3::new(0.0, 0.5, 0.5);
-    let mut stats = Stats::new();
-    for i in 0..100_000 {
-        let mut rng = Rng::for_stream(11, 0, i);
-        let t = tracker.transmittance(origin, Vec3::X, a, b, &mut rng, &());
-        stats.add(t.to_array(), [truth; 3], 1.02);
+    for majorant_grid in [true, false] {
+        let medium = ramp_medium(n, None, scale, majorant_grid);
+        let h = medium.heterogeneous().unwrap();
+        let tracker = h.tracker::<Rgb>(medium.scale, &());
+        assert_eq!(tracker.majorant(), 7.0 * scale);
+        // Along x at y = z = 0.5 from x = 0.1 to x = 0.9, inside the linear part [1/16, 15/16].
+        let (a, b) = (0.1, 0.9);
+        let truth = ramp_transmittance(n, a, b, 1.0, scale);
+        let origin = Vec3::new(0.0, 0.5, 0.5);
+        let mut stats = Stats::new();
+        for i in 0..100_000 {
+            let mut rng = Rng::for_stream(11, 0, i);
+            let t = tracker.transmittance(origin, Vec3::X, a, b, &mut rng, &());
+            stats.add(t.to_array(), [truth; 3], 1.02);
+        }
+        stats.check(&format!("ratio tracking, majorant grid {majorant_grid}"));
+        // A segment outside the region transmits exactly 1.
+        let mut rng = Rng::new(1, 1);
+        let outside = tracker.transmittance(Vec3::new(0.0, 2.0, 0.5), Vec3::X, 0.0, 1.0, &mut rng, &());
+        assert_eq!(outside, Rgb::splat(1.0));
     }
-    stats.check("ratio tracking");
-    // A segment outside the region transmits exactly 1.
-    let mut rng = Rng::new(1, 1);
-    assert_eq!(tracker.transmittance(Vec3::new(0.0, 2.0, 0.5), Vec3::X, 0.0, 1.0, &mut rng, &()), Rgb::splat(1.0));
 }
 
 /// Delta tracking with the spectral MIS on a chromatic ramp: over many paths, each with its
@@ -122,22 +127,24 @@ fn ratio_tracking_matches_the_analytic_transmittance() {
 fn delta_tracking_is_unbiased_per_channel() {
     let (n, scale) = (8, 0.3);
     let tint = Rgb::new(0.3, 1.0, 1.8);
-    let medium = ramp_medium(n, Some(tint), scale);
-    let h = medium.heterogeneous().unwrap();
-    let tracker = h.tracker::<Rgb>(medium.scale, &());
-    let (a, b) = (0.1, 0.9);
-    let truth = tint.map(|k| ramp_transmittance(n, a, b, k, scale)).to_array();
-    let origin = Vec3::new(a, 0.5, 0.5);
-    let mut stats = Stats::new();
-    for i in 0..1_000_000 {
-        let mut rng = Rng::for_stream(12, 0, i);
-        let channel = (rng.uniform() * 3.0) as usize;
-        let mut ratios = Rgb::splat(1.0);
-        let flight = tracker.sample_distance(origin, Vec3::X, b - a, channel.min(2), &mut rng, &mut ratios, &());
-        let passed = if flight.scattered { Rgb::BLACK } else { flight.weight };
-        stats.add(passed.to_array(), truth, 1.02);
+    for majorant_grid in [true, false] {
+        let medium = ramp_medium(n, Some(tint), scale, majorant_grid);
+        let h = medium.heterogeneous().unwrap();
+        let tracker = h.tracker::<Rgb>(medium.scale, &());
+        let (a, b) = (0.1, 0.9);
+        let truth = tint.map(|k| ramp_transmittance(n, a, b, k, scale)).to_array();
+        let origin = Vec3::new(a, 0.5, 0.5);
+        let mut stats = Stats::new();
+        for i in 0..1_000_000 {
+            let mut rng = Rng::for_stream(12, 0, i);
+            let channel = (rng.uniform() * 3.0) as usize;
+            let mut ratios = Rgb::splat(1.0);
+            let flight = tracker.sample_distance(origin, Vec3::X, b - a, channel.min(2), &mut rng, &mut ratios, &());
+            let passed = if flight.scattered { Rgb::BLACK } else { flight.weight };
+            stats.add(passed.to_array(), truth, 1.02);
+        }
+        stats.check(&format!("delta tracking, chromatic, majorant grid {majorant_grid}"));
     }
-    stats.check("delta tracking, chromatic");
 }
 
 /// An index-matched sphere of radius 1 filled with `medium`, under a uniform environment of
@@ -193,7 +200,7 @@ fn furnace_medium(direct_sigma_s: bool) -> Medium {
     };
     let albedo = Volume::constant(Coefficient::rgb(Rgb::splat(1.0)), Affine3A::IDENTITY);
     let sigma_s = direct_sigma_s.then(|| sigma_t.clone());
-    let h = Heterogeneous { sigma_t, albedo, sigma_s, region: to_world.inverse() };
+    let h = Heterogeneous::new(sigma_t, albedo, sigma_s, to_world.inverse());
     Medium {
         coefficients: Coefficients::Heterogeneous(Arc::new(h)),
         scale: 1.5,

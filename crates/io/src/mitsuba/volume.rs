@@ -31,7 +31,7 @@ impl<'a> Loader<'a> {
             return Err(p.error(format!("the sigma_t volume's bounding box {lo} – {hi} is empty")));
         }
         let region = Affine3A::from_scale(extent.recip()) * Affine3A::from_translation(-lo);
-        Ok(Coefficients::Heterogeneous(Arc::new(Heterogeneous { sigma_t, albedo, sigma_s: None, region })))
+        Ok(Coefficients::Heterogeneous(Arc::new(Heterogeneous::new(sigma_t, albedo, None, region))))
     }
 
     /// Property `name` of a heterogeneous medium: a nested `<volume>` or a colour (a constant

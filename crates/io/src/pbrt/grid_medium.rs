@@ -62,12 +62,7 @@ pub(super) fn uniform_grid(
     };
     let albedo = Volume::constant(Coefficient::rgb(Rgb::splat(1.0)), to_local);
     let (sigma_t, sigma_s) = (volume(sigma_a.rgb + sigma_s.rgb), volume(sigma_s.rgb));
-    Ok(Coefficients::Heterogeneous(Arc::new(Heterogeneous {
-        sigma_t,
-        albedo,
-        sigma_s: Some(sigma_s),
-        region: to_local,
-    })))
+    Ok(Coefficients::Heterogeneous(Arc::new(Heterogeneous::new(sigma_t, albedo, Some(sigma_s), to_local))))
 }
 
 /// `nx ny nz` (each default 1, at least 1).
@@ -147,12 +142,7 @@ pub(super) fn rgb_grid(file: &Path, d: &Directive, ctm: &Mat4) -> Result<Coeffic
         })
     };
     let albedo = Volume::constant(Coefficient::rgb(Rgb::splat(1.0)), to_local);
-    Ok(Coefficients::Heterogeneous(Arc::new(Heterogeneous {
-        sigma_t: volume(t)?,
-        albedo,
-        sigma_s: Some(volume(s)?),
-        region: to_local,
-    })))
+    Ok(Coefficients::Heterogeneous(Arc::new(Heterogeneous::new(volume(t)?, albedo, Some(volume(s)?), to_local))))
 }
 
 /// The affine part of `m` in single precision; `None` when it is singular, projective or not

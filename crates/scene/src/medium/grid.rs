@@ -96,7 +96,25 @@ impl Grid {
         self.max
     }
 
-    /// The voxel at integer indices, `None` outside the grid.
+    /// The largest value per channel over the voxels with indices in the inclusive ranges
+    /// `x`, `y`, `z` (each within the grid).
+    pub fn max_over(&self, x: (usize, usize), y: (usize, usize), z: (usize, usize)) -> Rgb {
+        let mut max = [0.0f32; 3];
+        for k in z.0..=z.1.min(self.dims[2] - 1) {
+            for j in y.0..=y.1.min(self.dims[1] - 1) {
+                let row = (k * self.dims[1] + j) * self.dims[0];
+                for i in x.0..=x.1.min(self.dims[0] - 1) {
+                    let at = (row + i) * self.channels;
+                    for (c, m) in max.iter_mut().enumerate() {
+                        *m = m.max(self.values[at + c.min(self.channels - 1)]);
+                    }
+                }
+            }
+        }
+        Rgb::new(max[0], max[1], max[2])
+    }
+
+    /// The voxel at integer indices (clamped, or zero outside the grid for [`Outside::Zero`]).
     #[inline]
     fn voxel(&self, i: [i64; 3], outside: Outside) -> Rgb {
         let mut index = [0usize; 3];

@@ -22,6 +22,10 @@
 //! event has weight 1 and a real event the albedo: plain delta tracking (Woodcock et al.
 //! 1965).
 //!
+//! **Majorant grid** ([`super::majorant`]): with a gridded σ_t, tentative collisions are sampled
+//! cell by cell of a coarse grid with each cell's (grey) majorant instead of the global one;
+//! everything above holds per cell.
+//!
 //! **Ratio tracking** (Novák, Selle and Jarosz 2014, "Residual ratio tracking for estimating attenuation in participating media"): the transmittance along a segment
 //! is estimated by the product `Π (1 − σ_t(x_i) / σ̄)` over the tentative collisions `x_i`,
 //! unbiased per channel (the collisions do not depend on the channel).
@@ -30,8 +34,11 @@ use glam::{Affine3A, Vec3};
 use math::Rng;
 use spectrum::SpectralMode;
 
+use std::sync::Arc;
+
 use super::DistanceSample;
 use super::grid::Volume;
+use super::majorant::MajorantGrid;
 
 /// The spatially varying coefficients of a heterogeneous medium.
 #[derive(Clone, Debug, PartialEq)]
@@ -46,6 +53,8 @@ pub struct Heterogeneous {
     pub sigma_s: Option<Volume>,
     /// World → the unit cube of the box the medium fills (empty outside).
     pub region: Affine3A,
+    /// Per-cell majorants of `sigma_t` over the region (built by [`Heterogeneous::new`]).
+    majorants: Option<Arc<MajorantGrid>>,
 }
 
 /// A heterogeneous medium prepared for a path's wavelengths.
@@ -58,9 +67,26 @@ pub struct Tracker<'a, S: SpectralMode> {
     albedo_tint: S,
     /// σ̄, per scene unit.
     majorant: f32,
+    /// The largest channel of `sigma_t_tint`.
+    tint_max: f32,
+    /// The RGB basis at the wavelengths, negative parts removed (3-channel grids).
+    basis: [S; 3],
 }
 
 impl Heterogeneous {
+    /// A medium with σ_t `sigma_t`, albedo `albedo` (or scattering `sigma_s`) filling the box
+    /// whose unit cube is `region` of world space; builds the majorant grid of a gridded σ_t.
+    pub fn new(sigma_t: Volume, albedo: Volume, sigma_s: Option<Volume>, region: Affine3A) -> Self {
+        let majorants = MajorantGrid::new(&sigma_t, region).map(Arc::new);
+        Self { sigma_t, albedo, sigma_s, region, majorants }
+    }
+
+    /// The same medium sampled with its global majorant only (no majorant grid), for tests.
+    pub fn without_majorant_grid(mut self) -> Self {
+        self.majorants = None;
+        self
+    }
+
     /// The medium at the wavelengths `w`, with the medium's `scale`.
     pub fn tracker<'a, S: SpectralMode>(&'a self, scale: f32, w: &S::Wavelengths) -> Tracker<'a, S> {
         let sigma_t_tint = self.sigma_t.value.eval::<S>(w, false) * scale;
@@ -70,7 +96,9 @@ impl Heterogeneous {
         };
         let value_max = (0..S::CHANNELS).map(|c| sigma_t_tint.channel(c)).fold(0.0, f32::max);
         let majorant = value_max * self.sigma_t.grid_bound::<S>(w);
-        Tracker { medium: self, sigma_t_tint, albedo_tint, majorant }
+        let basis = [(1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)]
+            .map(|(r, g, b)| S::from_reflectance(w, spectrum::Rgb::new(r, g, b)).map(|v| v.max(0.0)));
+        Tracker { medium: self, sigma_t_tint, albedo_tint, majorant, tint_max: value_max, basis }
     }
 
     /// The largest albedo over space and the RGB channels (unitless).
@@ -130,6 +158,31 @@ impl<S: SpectralMode> Tracker<'_, S> {
         (t0 < t1 && self.majorant > 0.0).then_some((t0, t1))
     }
 
+    /// The majorant (per scene unit) of a majorant-grid cell with per-channel grid maxima `max`
+    /// (the bound of [`Volume::grid_bound`] applied to the cell), at most the global one.
+    #[inline]
+    fn cell_majorant(&self, max: spectrum::Rgb) -> f32 {
+        let grid_bound = if self.medium.sigma_t.grid.as_ref().is_some_and(|g| g.channels() == 1) {
+            max.r
+        } else {
+            let b = self.basis[0] * max.r + self.basis[1] * max.g + self.basis[2] * max.b;
+            (0..S::CHANNELS).map(|c| b.channel(c)).fold(0.0, f32::max)
+        };
+        (self.tint_max * grid_bound).min(self.majorant)
+    }
+
+    /// Calls `visit(t0, t1, σ̄)` for the stretches of `[t0, t1]` along the ray with a constant
+    /// majorant: the cells of the majorant grid, or the whole interval with the global one.
+    fn stretches(&self, origin: Vec3, direction: Vec3, t0: f32, t1: f32, mut visit: impl FnMut(f32, f32, f32) -> bool) {
+        match &self.medium.majorants {
+            Some(grid) => grid
+                .walk(&self.medium.region, origin, direction, t0, t1, |s| visit(s.t0, s.t1, self.cell_majorant(s.max))),
+            None => {
+                visit(t0, t1, self.majorant);
+            }
+        }
+    }
+
     /// Delta tracking along the ray from `origin` along unit `direction` up to `t_max` (may be
     /// infinite) with the path's channel `channel` and density ratios `ratios` (updated);
     /// module documentation. The distance is from `origin`.
@@ -146,33 +199,44 @@ impl<S: SpectralMode> Tracker<'_, S> {
     ) -> DistanceSample<S> {
         let channel = channel.min(S::CHANNELS - 1);
         let mut weight = S::splat(1.0);
-        let passed = |weight| DistanceSample { distance: t_max, scattered: false, weight };
-        let Some((t0, t1)) = self.clip(origin, direction, t_max) else { return passed(weight) };
-        let mut t = t0;
-        loop {
-            t -= (1.0 - rng.uniform()).ln() / self.majorant;
-            if t >= t1 {
-                return passed(weight);
+        let Some((t0, t1)) = self.clip(origin, direction, t_max) else {
+            return DistanceSample { distance: t_max, scattered: false, weight };
+        };
+        let mut outcome = None;
+        self.stretches(origin, direction, t0, t1, |start, end, majorant| {
+            if majorant <= 0.0 {
+                return true;
             }
-            let (sigma_t, sigma_s) = self.coefficients(origin + t * direction, w);
-            let real = rng.uniform() * self.majorant < sigma_t.channel(channel);
-            let (g, d) = if real {
-                (sigma_s, sigma_t)
-            } else {
-                let sigma_n = sigma_t.map(|s| self.majorant - s);
-                (sigma_n, sigma_n)
-            };
-            let weighted = *ratios * d;
-            let mean = (0..S::CHANNELS).map(|c| weighted.channel(c)).sum::<f32>() / S::CHANNELS as f32;
-            if !(mean > 0.0 && mean.is_finite()) {
-                return DistanceSample { distance: t, scattered: real, weight: S::default() };
+            let mut t = start;
+            loop {
+                t -= (1.0 - rng.uniform()).ln() / majorant;
+                if t >= end {
+                    return true;
+                }
+                let (sigma_t, sigma_s) = self.coefficients(origin + t * direction, w);
+                let sigma_t = sigma_t.map(|s| s.min(majorant));
+                let real = rng.uniform() * majorant < sigma_t.channel(channel);
+                let (g, d) = if real {
+                    (sigma_s, sigma_t)
+                } else {
+                    let sigma_n = sigma_t.map(|s| majorant - s);
+                    (sigma_n, sigma_n)
+                };
+                let weighted = *ratios * d;
+                let mean = (0..S::CHANNELS).map(|c| weighted.channel(c)).sum::<f32>() / S::CHANNELS as f32;
+                if !(mean > 0.0 && mean.is_finite()) {
+                    outcome = Some(DistanceSample { distance: t, scattered: real, weight: S::default() });
+                    return false;
+                }
+                *ratios = weighted * (1.0 / mean);
+                weight *= g * (1.0 / mean);
+                if real {
+                    outcome = Some(DistanceSample { distance: t, scattered: true, weight });
+                    return false;
+                }
             }
-            *ratios = weighted * (1.0 / mean);
-            weight *= g * (1.0 / mean);
-            if real {
-                return DistanceSample { distance: t, scattered: true, weight };
-            }
-        }
+        });
+        outcome.unwrap_or(DistanceSample { distance: t_max, scattered: false, weight })
     }
 
     /// Ratio-tracking estimate of the transmittance (per channel, unitless) of the segment from
@@ -188,17 +252,27 @@ impl<S: SpectralMode> Tracker<'_, S> {
     ) -> S {
         let mut carried = S::splat(1.0);
         let Some((t0, t1)) = self.clip(origin, direction, t_max) else { return carried };
-        let mut t = t0.max(t_min);
-        loop {
-            t -= (1.0 - rng.uniform()).ln() / self.majorant;
-            if t >= t1 {
-                return carried;
-            }
-            let (sigma_t, _) = self.coefficients(origin + t * direction, w);
-            carried *= sigma_t.map(|s| 1.0 - s / self.majorant);
-            if carried.is_black() {
-                return carried;
-            }
+        let t0 = t0.max(t_min);
+        if t0 >= t1 {
+            return carried;
         }
+        self.stretches(origin, direction, t0, t1, |start, end, majorant| {
+            if majorant <= 0.0 {
+                return true;
+            }
+            let mut t = start;
+            loop {
+                t -= (1.0 - rng.uniform()).ln() / majorant;
+                if t >= end {
+                    return true;
+                }
+                let (sigma_t, _) = self.coefficients(origin + t * direction, w);
+                carried *= sigma_t.map(|s| 1.0 - s.min(majorant) / majorant);
+                if carried.is_black() {
+                    return false;
+                }
+            }
+        });
+        carried
     }
 }

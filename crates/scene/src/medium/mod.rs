@@ -25,6 +25,7 @@ pub(crate) mod build;
 pub mod grid;
 pub mod heterogeneous;
 pub mod homogeneous;
+pub mod majorant;
 pub mod phase;
 
 use std::sync::Arc;
