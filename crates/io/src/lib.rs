@@ -30,6 +30,7 @@ mod sdfgrid;
 mod srgb;
 mod texture_file;
 mod via_image;
+mod volfile;
 
 use std::path::Path;
 

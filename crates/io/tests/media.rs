@@ -80,7 +80,12 @@ fn mitsuba_media_interfaces_sensor_and_null() {
 #[test]
 fn mitsuba_unsupported_media_are_errors() {
     let cases = [
-        (r#"<medium type="heterogeneous" id="m"/>"#, "heterogeneous"),
+        (r#"<medium type="heterogeneous" id="m"><volume type="procedural" name="sigma_t"/></medium>"#, "procedural"),
+        (
+            r#"<medium type="heterogeneous" id="m"><volume type="gridvolume" name="albedo"><string name="filename" value="none.vol"/></volume></medium>"#,
+            "none.vol",
+        ),
+        (r#"<medium type="checkerboard" id="m"/>"#, "checkerboard"),
         (r#"<medium type="homogeneous" id="m"><phase type="rayleigh"/></medium>"#, "rayleigh"),
         (r#"<medium type="homogeneous" id="m"><volume type="gridvolume" name="sigma_t"/></medium>"#, "volume data"),
         (r#"<medium type="homogeneous" id="m"><rgb name="albedo" value="1.5"/></medium>"#, "albedo"),
@@ -145,7 +150,7 @@ fn pbrt_media_interfaces_camera_and_interface_material() {
 #[test]
 fn pbrt_unsupported_media_are_errors() {
     let cases = [
-        (r#"MakeNamedMedium "m" "string type" "rgbgrid""#, "rgbgrid"),
+        (r#"MakeNamedMedium "m" "string type" "cloud""#, "cloud"),
         (r#"MakeNamedMedium "m" "string type" "nanovdb""#, "nanovdb"),
         (r#"MakeNamedMedium "m" "string type" "homogeneous" "string preset" "Skin1""#, "preset"),
         (r#"MakeNamedMedium "m" "string type" "homogeneous" "rgb Le" [1 1 1]"#, "Le"),

@@ -324,6 +324,9 @@ pub fn check_media(scene: &Scene, algorithm: Algorithm) -> Result<(), String> {
     ) {
         return Err("media are rendered by pt, lt and bpt only so far (issue #15)".to_string());
     }
+    if algorithm != Algorithm::PathTracing && scene.media.has_heterogeneous() {
+        return Err("heterogeneous (grid) media are rendered by pt only so far (issue #15)".to_string());
+    }
     if scene.has_fluorescence() {
         return Err("fluorescent materials in a scene with media are not supported yet (issue #15)".to_string());
     }

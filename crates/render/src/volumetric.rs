@@ -1,4 +1,4 @@
-//! The path tracer's volumetric walk: camera paths through homogeneous participating media and
+//! The path tracer's volumetric walk: camera paths through participating media and
 //! index-matched (null) boundaries, with next-event estimation at surface and medium vertices
 //! combined with BSDF and phase-function sampling by MIS. [`crate::path_tracer`] uses it for
 //! scenes whose [`scene::medium::Media`] is active; surface-only scenes never reach this file.
@@ -8,7 +8,10 @@
 //! distances and divides by the average over the channels of the densities of its distances
 //! (unbiased per channel, bounded weights; see the module `scene::medium::homogeneous`). The
 //! `RAY_EPSILON` a ray leaving a surface skips is counted in its free flight (and in the shadow
-//! rays' transmittance), so a medium is exactly as thick as its geometry.
+//! rays' transmittance), so a medium is exactly as thick as its geometry. Heterogeneous media
+//! sample free flights by delta tracking with the same spectral MIS and estimate shadow-ray
+//! transmittance by ratio tracking (the module `scene::medium::heterogeneous`); homogeneous
+//! media keep their closed forms (one random number per free flight, as before).
 //!
 //! **Medium vertices** scatter with the phase function: NEE samples a light and multiplies by
 //! the phase value and the shadow ray's transmittance; phase sampling continues the path with
@@ -82,8 +85,14 @@ pub(crate) fn radiance<S: SpectralMode>(
         // Free flight through the current medium.
         if let Some(index) = medium {
             let m = media.medium(index);
-            let c = m.coefficients::<S>(w);
-            let flight = sample_distance(c.sigma_t, c.sigma_s, t_max + gap, channel, rng.uniform(), &mut ratios);
+            let flight = if let Some(h) = m.heterogeneous() {
+                let origin = ray.origin - gap * ray.direction;
+                let tracker = h.tracker::<S>(m.scale, w);
+                tracker.sample_distance(origin, ray.direction, t_max + gap, channel, rng, &mut ratios, w)
+            } else {
+                let c = m.coefficients::<S>(w);
+                sample_distance(c.sigma_t, c.sigma_s, t_max + gap, channel, rng.uniform(), &mut ratios)
+            };
             throughput *= flight.weight;
             if flight.scattered {
                 if path_length >= max_length || throughput.is_black() {
@@ -99,8 +108,15 @@ pub(crate) fn radiance<S: SpectralMode>(
                     if let Some(direct) = light.sample_direct(position, u, sphere) {
                         let phase = m.phase.evaluate(fixed, direct.direction);
                         if phase > 0.0
-                            && let Some(carried) =
-                                shadow_transmittance::<S>(scene, position, direct.direction, direct.distance, medium, w)
+                            && let Some(carried) = tracked_transmittance::<S>(
+                                scene,
+                                position,
+                                direct.direction,
+                                direct.distance,
+                                medium,
+                                w,
+                                rng,
+                            )
                         {
                             let light_pdf = direct.direct_pdf.0 * pick;
                             let weight =
@@ -197,13 +213,14 @@ pub(crate) fn radiance<S: SpectralMode>(
             let u = rng.uniform2();
             if let Some(direct) = light.sample_direct(hit.position, u, sphere)
                 && let Some(eval) = bsdf.evaluate(direct.direction)
-                && let Some(carried) = shadow_transmittance::<S>(
+                && let Some(carried) = tracked_transmittance::<S>(
                     scene,
                     hit.position,
                     direct.direction,
                     direct.distance,
                     medium_towards(direct.direction),
                     w,
+                    rng,
                 )
             {
                 let light_pdf = direct.direct_pdf.0 * pick;
@@ -272,9 +289,12 @@ fn survives_throughput_roulette<S: SpectralMode>(
 
 /// The transmittance (per channel, unitless) of the segment from `point` along unit
 /// `direction` over `distance` (may be infinite), starting in `medium`: the product of the
-/// Beer–Lambert transmittances of its medium pieces, switching media at interfaces. `None`
-/// when a surface that is not an index-matched boundary blocks it (over the open interval
-/// `(ε, distance − ε)` of [`Scene::occluded`]) or nothing gets through.
+/// transmittances of its medium pieces, switching media at interfaces. `None` when a surface
+/// that is not an index-matched boundary blocks it (over the open interval `(ε, distance − ε)`
+/// of [`Scene::occluded`]) or nothing gets through. Homogeneous pieces give Beer–Lambert's
+/// exact value; heterogeneous pieces a ratio-tracking estimate drawn from a generator seeded
+/// by the segment itself (deterministic per segment — the path tracer uses
+/// [`tracked_transmittance`] with its own generator instead).
 pub fn shadow_transmittance<S: SpectralMode>(
     scene: &Scene,
     point: Vec3,
@@ -282,6 +302,23 @@ pub fn shadow_transmittance<S: SpectralMode>(
     distance: f32,
     medium: Option<u32>,
     w: &S::Wavelengths,
+) -> Option<S> {
+    let bits = [point.x, point.y, point.z, direction.x, direction.y, direction.z, distance];
+    let seed = bits.iter().fold(0u64, |h, v| (h ^ v.to_bits() as u64).wrapping_mul(0x100_0000_01b3));
+    tracked_transmittance(scene, point, direction, distance, medium, w, &mut Rng::new(seed, 0x5eed))
+}
+
+/// [`shadow_transmittance`] with ratio tracking in heterogeneous media drawing from `rng`
+/// (an unbiased estimate per channel; exact for homogeneous media, which draw nothing).
+#[allow(clippy::too_many_arguments)]
+pub fn tracked_transmittance<S: SpectralMode>(
+    scene: &Scene,
+    point: Vec3,
+    direction: Vec3,
+    distance: f32,
+    medium: Option<u32>,
+    w: &S::Wavelengths,
+    rng: &mut Rng,
 ) -> Option<S> {
     let media: &Media = &scene.media;
     let mut medium = medium;
@@ -295,7 +332,12 @@ pub fn shadow_transmittance<S: SpectralMode>(
         // The medium piece up to the next boundary, or to the end of the segment.
         let end = hit.as_ref().map_or(distance, |h| offset + h.distance);
         if let Some(index) = medium {
-            carried *= transmittance(media.medium(index).coefficients::<S>(w).sigma_t, end - crossed);
+            let m = media.medium(index);
+            if let Some(h) = m.heterogeneous() {
+                carried *= h.tracker::<S>(m.scale, w).transmittance(point, direction, crossed, end, rng, w);
+            } else {
+                carried *= transmittance(m.coefficients::<S>(w).sigma_t, end - crossed);
+            }
         }
         let Some(hit) = hit else { break };
         if !media.is_null(hit.material) {

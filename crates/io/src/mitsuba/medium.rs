@@ -4,8 +4,8 @@
 //! A homogeneous medium reads `sigma_t` (default 1) and `albedo` (default 0.75), as `rgb`,
 //! `float` or `spectrum` (a tabulated spectrum is also kept for spectral rendering), `scale`
 //! (default 1) and a `<phase>`: `isotropic` (the default) or `hg` with `g` (default 0.8,
-//! Mitsuba's). Heterogeneous media, grid volumes and other phase functions are errors naming
-//! the file, line and feature (issue #15).
+//! Mitsuba's). `heterogeneous` media read their volumes in [`super::volume`]. Other medium
+//! types and phase functions are errors naming the file, line and feature (issue #15).
 
 use std::sync::Arc;
 
@@ -81,21 +81,26 @@ impl<'a> Loader<'a> {
     /// A `<medium>` element.
     fn medium(&mut self, node: &'a Node) -> Result<Medium, SceneError> {
         let p = Plugin::new(node)?;
-        if p.ty != "homogeneous" {
-            return Err(p.error(format!(
-                "medium type '{}' is not supported (only 'homogeneous'; heterogeneous media are issue #15)",
-                p.ty
-            )));
-        }
-        if let Some(object) = p.objects.iter().find(|o| matches!(o.node.tag.as_str(), "volume" | "texture")) {
-            return Err(object.node.pos.error(format!(
-                "{}: volume data (<{}>) is not supported (only constant coefficients; issue #15)",
-                p.what(),
-                object.node.tag
-            )));
-        }
-        let sigma_t = self.coefficient(&p, "sigma_t", 1.0, SpectrumUse::Emission)?;
-        let albedo = self.coefficient(&p, "albedo", 0.75, SpectrumUse::Reflectance)?;
+        let coefficients = match p.ty.as_str() {
+            "homogeneous" => {
+                if let Some(object) = p.objects.iter().find(|o| matches!(o.node.tag.as_str(), "volume" | "texture")) {
+                    return Err(object.node.pos.error(format!(
+                        "{}: volume data (<{}>) needs a 'heterogeneous' medium",
+                        p.what(),
+                        object.node.tag
+                    )));
+                }
+                let sigma_t = self.coefficient(&p, "sigma_t", 1.0, SpectrumUse::Emission)?;
+                let albedo = self.coefficient(&p, "albedo", 0.75, SpectrumUse::Reflectance)?;
+                Coefficients::ExtinctionAlbedo { sigma_t, albedo }
+            }
+            "heterogeneous" => self.heterogeneous(&p)?,
+            other => {
+                return Err(p.error(format!(
+                    "medium type '{other}' is not supported (only 'homogeneous' and 'heterogeneous')"
+                )));
+            }
+        };
         let scale = p.float_or("scale", 1.0)? as f32;
         p.ignore(&["sample_emitters", "has_spectral_extinction"]);
         let mut phase = PhaseFunction::Isotropic;
@@ -104,7 +109,7 @@ impl<'a> Loader<'a> {
             phase = self.phase(object.node)?;
         }
         p.finish(&mut self.warnings);
-        let medium = Medium { coefficients: Coefficients::ExtinctionAlbedo { sigma_t, albedo }, scale, phase };
+        let medium = Medium { coefficients, scale, phase };
         medium.validate().map_err(|e| p.error(e))?;
         Ok(medium)
     }
@@ -122,7 +127,7 @@ impl<'a> Loader<'a> {
     }
 
     /// A medium coefficient: a colour (RGB) and, for a tabulated spectrum, the spectrum.
-    fn coefficient(
+    pub(super) fn coefficient(
         &mut self,
         p: &Plugin,
         name: &str,

@@ -45,6 +45,7 @@ mod sensor;
 mod shape;
 mod textured;
 mod transform;
+mod volume;
 mod xml;
 
 use std::collections::{HashMap, HashSet};

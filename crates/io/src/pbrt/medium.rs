@@ -4,7 +4,7 @@
 //! `""` is vacuum), the camera's medium (the current outside medium at `Camera`) and the
 //! `interface` material of index-matched boundaries. A shape gets the current interface when
 //! its two sides differ (pbrt-v4's `IsMediumTransition`). Named presets, emissive media (`Le`)
-//! and the grid media (`uniformgrid`, `rgbgrid`, `nanovdb`, `cloud`) are errors naming the file,
+//! and the media `nanovdb`, `cloud` are errors naming the file,
 //! line and feature (issue #15).
 
 use std::collections::HashMap;
@@ -75,11 +75,13 @@ impl Builder {
         let Some((ty, pos)) = p.string("type")? else {
             return Err(err(file, d.pos, format!("MakeNamedMedium \"{name}\" needs a \"string type\"")));
         };
-        if ty != "homogeneous" {
+        if !matches!(ty.as_str(), "homogeneous" | "uniformgrid" | "rgbgrid") {
             return Err(err(
                 file,
                 pos,
-                format!("medium type \"{ty}\" is not supported (only \"homogeneous\"; grid media are issue #15)"),
+                format!(
+                    "medium type \"{ty}\" is not supported (only \"homogeneous\", \"uniformgrid\" and \"rgbgrid\"; issue #15)"
+                ),
             ));
         }
         if let Some((preset, pos)) = p.string("preset")? {
@@ -96,12 +98,22 @@ impl Builder {
                 return Err(err(file, le.pos, "emissive media (\"Le\") are not supported"));
             }
         }
-        let sigma_a = coefficient(p, "sigma_a")?;
-        let sigma_s = coefficient(p, "sigma_s")?;
         let scale = p.float("scale", 1.0)?;
         let g = p.float("g", 0.0)?;
         let phase = PhaseFunction::henyey_greenstein(g).map_err(|e| err(file, d.pos, e))?;
-        let medium = Medium { coefficients: Coefficients::AbsorptionScattering { sigma_a, sigma_s }, scale, phase };
+        let ctm = self.state.ctm;
+        let coefficients = if ty == "rgbgrid" {
+            super::grid_medium::rgb_grid(file, d, &ctm)?
+        } else {
+            let sigma_a = coefficient(p, "sigma_a")?;
+            let sigma_s = coefficient(p, "sigma_s")?;
+            if ty == "uniformgrid" {
+                super::grid_medium::uniform_grid(file, d, &ctm, &sigma_a, &sigma_s)?
+            } else {
+                Coefficients::AbsorptionScattering { sigma_a, sigma_s }
+            }
+        };
+        let medium = Medium { coefficients, scale, phase };
         medium.validate().map_err(|e| err(file, d.pos, format!("medium \"{name}\": {e}")))?;
         self.warn_unused(p);
         self.media.desc.media.push(medium);

@@ -59,6 +59,7 @@ pub mod color;
 mod curve;
 pub mod envmap;
 mod goniometric;
+mod grid_medium;
 mod instancing;
 mod medium;
 mod parser;

@@ -1,5 +1,5 @@
-//! Participating media: homogeneous media with an isotropic or Henyey–Greenstein phase
-//! function, attached to the two sides of shapes and to the camera.
+//! Participating media: homogeneous and heterogeneous (grid) media with an isotropic or
+//! Henyey–Greenstein phase function, attached to the two sides of shapes and to the camera.
 //!
 //! **What a scene holds** ([`Media`]): the media, the medium on each side of the world
 //! primitives that bound one ([`MediumInterface`]: interior = the side opposite the geometric
@@ -15,11 +15,17 @@
 //! (the reflectance upsampling of `rgb / max` times `max`); tabulated spectra are evaluated at
 //! the wavelengths.
 //!
-//! What this module does not do: heterogeneous media, media on instanced geometry, and light
+//! Heterogeneous media ([`heterogeneous`], [`grid`]) hold their coefficients in [`Volume`]s and
+//! are sampled by delta tracking and ratio tracking.
+//!
+//! What this module does not do: media on instanced geometry, emissive media, and light
 //! transport (the volumetric path tracer lives in the `render` crate). Issue #15.
 
 pub(crate) mod build;
+pub mod grid;
+pub mod heterogeneous;
 pub mod homogeneous;
+pub mod majorant;
 pub mod phase;
 
 use std::sync::Arc;
@@ -27,6 +33,8 @@ use std::sync::Arc;
 use spectrum::tabulated::Tabulated;
 use spectrum::{Rgb, SpectralMode};
 
+pub use grid::{Filter, Grid, Outside, Volume};
+pub use heterogeneous::{Heterogeneous, Tracker};
 pub use homogeneous::{DistanceSample, sample_distance, transmittance};
 pub use phase::{PhaseFunction, PhaseSample};
 
@@ -91,9 +99,13 @@ pub enum Coefficients {
         /// σ_s.
         sigma_s: Coefficient,
     },
+    /// Spatially varying extinction and albedo (Mitsuba's `heterogeneous`, pbrt-v4's
+    /// `uniformgrid`); `scale` multiplies the extinction.
+    Heterogeneous(Arc<Heterogeneous>),
 }
 
-/// A homogeneous medium.
+/// A participating medium: homogeneous, or heterogeneous when its coefficients are
+/// [`Coefficients::Heterogeneous`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Medium {
     /// The coefficients as the file gives them.
@@ -114,7 +126,9 @@ pub struct MediumCoefficients<S> {
 }
 
 impl Medium {
-    /// σ_t and σ_s at the wavelengths (scale applied), per scene unit.
+    /// σ_t and σ_s at the wavelengths (scale applied), per scene unit. For a heterogeneous
+    /// medium: the majorant σ̄ (a bound of σ_t over space) in every channel and σ_s = 0 —
+    /// use [`Medium::heterogeneous`] for its coefficients at a point.
     #[inline]
     pub fn coefficients<S: SpectralMode>(&self, w: &S::Wavelengths) -> MediumCoefficients<S> {
         match &self.coefficients {
@@ -128,12 +142,28 @@ impl Medium {
                 let sigma_s = sigma_s.eval::<S>(w, false).map(|v| v.max(0.0)) * self.scale;
                 MediumCoefficients { sigma_t: sigma_a + sigma_s, sigma_s }
             }
+            Coefficients::Heterogeneous(h) => MediumCoefficients {
+                sigma_t: S::splat(h.tracker::<S>(self.scale, w).majorant()),
+                sigma_s: S::default(),
+            },
+        }
+    }
+
+    /// The spatially varying coefficients, `None` for a homogeneous medium.
+    #[inline]
+    pub fn heterogeneous(&self) -> Option<&Heterogeneous> {
+        match &self.coefficients {
+            Coefficients::Heterogeneous(h) => Some(h),
+            _ => None,
         }
     }
 
     /// The largest single-scattering albedo over the RGB channels (unitless; Russian roulette's
     /// continuation probability at a scattering event).
     pub fn max_albedo(&self) -> f32 {
+        if let Some(h) = self.heterogeneous() {
+            return h.max_albedo();
+        }
         let c = self.coefficients::<Rgb>(&());
         let a = |t: f32, s: f32| if t > 0.0 { s / t } else { 0.0 };
         a(c.sigma_t.r, c.sigma_s.r).max(a(c.sigma_t.g, c.sigma_s.g)).max(a(c.sigma_t.b, c.sigma_s.b)).min(1.0)
@@ -156,6 +186,15 @@ impl Medium {
             Coefficients::AbsorptionScattering { sigma_a, sigma_s } => {
                 sigma_a.validate("sigma_a")?;
                 sigma_s.validate("sigma_s")?;
+            }
+            Coefficients::Heterogeneous(h) => {
+                h.sigma_t.value.validate("sigma_t")?;
+                h.albedo.value.validate("albedo")?;
+                if h.albedo.value.rgb.max_component() * h.albedo.grid.as_ref().map_or(1.0, |g| g.max().max_component())
+                    > 1.0
+                {
+                    return Err("the albedo must be at most 1".to_string());
+                }
             }
         }
         Ok(())
@@ -201,6 +240,11 @@ impl Media {
     /// boundaries.
     pub fn is_active(&self) -> bool {
         !self.media.is_empty() || self.null_materials.iter().any(|n| *n)
+    }
+
+    /// Whether any medium is heterogeneous (only the path tracer renders those).
+    pub fn has_heterogeneous(&self) -> bool {
+        self.media.iter().any(|m| m.heterogeneous().is_some())
     }
 
     /// The interface of world primitive `primitive`, if it has one.
