@@ -22,12 +22,19 @@
 //! stays unbiased; it only spends more samples than needed where the medium is dense.
 //!
 //! **Shadow rays** ([`shadow_transmittance`]) pass through null boundaries, multiplying the
-//! Beer–Lambert transmittance of every medium segment and switching media at interfaces; any
-//! other surface blocks them.
+//! Beer–Lambert transmittance of every medium segment and switching media at interfaces. They
+//! also cross thin dielectrics, multiplying by their straight-through factor `T·(1 − R')`
+//! ([`scene::Bsdf::null_transmission`]): Mitsuba 3's thin dielectric transmits through a
+//! `Null` component, which its `volpath` treats this way. Any other surface blocks them.
 //!
 //! **Null boundaries** neither count as vertices nor change the direction; a BSDF or light
 //! sampling pdf measured at the last scattering vertex stays valid across them (the emitter's
-//! area pdf is converted with the whole distance from that vertex).
+//! area pdf is converted with the whole distance from that vertex). A sampled straight-through
+//! transmission of a thin dielectric is handled the same way (its expected weight is the shadow
+//! rays' factor `T·(1 − R')`), so an emitter found behind a thin dielectric is weighted by MIS
+//! against next-event estimation through it instead of counting as seen through a specular
+//! vertex. Both sides decide with the same test ([`null_factor`]), which keeps the weights of
+//! every path summing to one.
 //!
 //! Path length counts scattering vertices (surface or medium) as the surface-only tracer
 //! counts surface vertices, except that a specular transmission straight through a surface
@@ -38,7 +45,7 @@
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::medium::{Media, sample_distance, transmittance};
-use scene::{Bsdf, Scene, TransportMode};
+use scene::{Bsdf, Material, Scene, SurfaceHit, TransportMode};
 use spectrum::SpectralMode;
 
 use crate::path_tracer::{PathTracer, RussianRoulette};
@@ -236,6 +243,8 @@ pub(crate) fn radiance<S: SpectralMode>(
         let Some(sample) = bsdf.sample(rng.uniform3()) else { break };
         let straight_through =
             sample.lobe.is_specular() && sample.direction.dot(-fixed_direction) > STRAIGHT_THROUGH_COS;
+        // Through a thin dielectric's null component: no vertex (see the module docs).
+        let null_crossing = straight_through && is_null_interface(scene, &hit);
         if at_limit && !straight_through {
             break;
         }
@@ -252,11 +261,15 @@ pub(crate) fn radiance<S: SpectralMode>(
             terminated = true;
         }
         medium = medium_towards(sample.direction);
+        ray = Ray::new(hit.position + RAY_EPSILON * sample.direction, sample.direction);
+        gap = RAY_EPSILON;
+        if null_crossing {
+            travelled = distance + RAY_EPSILON;
+            continue;
+        }
         last_pdf = pdf;
         last_specular = sample.lobe.is_specular();
-        ray = Ray::new(hit.position + RAY_EPSILON * sample.direction, sample.direction);
         travelled = RAY_EPSILON;
-        gap = RAY_EPSILON;
         // A specular transmission straight through (a thin dielectric) is not a bounce, as in
         // Mitsuba 3, whose thin dielectric transmits with a null component.
         if !straight_through {
@@ -341,7 +354,7 @@ pub fn tracked_transmittance<S: SpectralMode>(
         }
         let Some(hit) = hit else { break };
         if !media.is_null(hit.material) {
-            return None;
+            carried *= null_factor::<S>(scene, &hit, direction, w)?;
         }
         if let Some(i) = media.interface(hit.primitive) {
             medium = i.medium_towards(direction, hit.normal);
@@ -350,4 +363,23 @@ pub fn tracked_transmittance<S: SpectralMode>(
         offset = end + RAY_EPSILON;
     }
     (!carried.is_black()).then_some(carried)
+}
+
+/// Whether the surface at `hit` is a thin dielectric, whose straight-through transmission the
+/// volumetric walk treats as a null component (module docs).
+#[inline]
+fn is_null_interface(scene: &Scene, hit: &SurfaceHit) -> bool {
+    matches!(scene.material(hit), Material::ThinDielectric { .. })
+}
+
+/// The factor (per channel) by which a shadow ray along `direction` crosses the surface at
+/// `hit`: `T·(1 − R')` for a thin dielectric ([`scene::Bsdf::null_transmission`]); `None` for
+/// any other surface, which blocks it.
+fn null_factor<S: SpectralMode>(scene: &Scene, hit: &SurfaceHit, direction: Vec3, w: &S::Wavelengths) -> Option<S> {
+    if !is_null_interface(scene, hit) {
+        return None;
+    }
+    let bsdf = Bsdf::new(scene.material(hit), &hit.shading_point(), -direction, TransportMode::Radiance)?;
+    let factor = S::from_reflectance(w, bsdf.null_transmission()?);
+    (!factor.is_black()).then_some(factor)
 }
