@@ -162,3 +162,19 @@ fn pbrt_unsupported_media_are_errors() {
         assert!(error.contains("scene.pbrt:2:") && error.contains(needle), "{error}");
     }
 }
+
+/// `scenes/cornell-fog.xml` loads as written: one fog medium inside a null cube, a glass
+/// sphere with fog outside and vacuum inside, the camera in vacuum, one spot light.
+#[test]
+fn the_repository_fog_scene_loads() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-fog.xml");
+    let d = io::mitsuba::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+    assert_eq!(d.media.media.len(), 1);
+    assert_eq!(d.media.camera, None);
+    assert_eq!(d.lights.len(), 1);
+    let interfaces: Vec<MediumInterface> = d.media.shapes.values().copied().collect();
+    assert!(interfaces.contains(&MediumInterface { interior: Some(0), exterior: None }), "{interfaces:?}");
+    assert!(interfaces.contains(&MediumInterface { interior: None, exterior: Some(0) }), "{interfaces:?}");
+    assert_eq!(d.media.null_materials.len(), 1);
+}
