@@ -5,8 +5,8 @@
 # Used to count how many public Mitsuba 3 / pbrt-v4 scene files the renderer reads (issue #12);
 # the collections are fetched, never committed. Needs target/release/vcm. Files that leave the
 # sample count to the command line (`$spp` without a default) get `-D spp=4`, as Mitsuba's
-# `-Dspp=4`. The last line counts the files that need no grid or unsupported media, polarization or
-# hair (issue #12's measure: at least 90 % of them must load).
+# `-Dspp=4`. The last line counts the files that need no unsupported media feature and no
+# polarization (issue #12's measure: at least 90 % of them must load).
 set -uo pipefail
 vcm="$(dirname "$0")/../target/release/vcm"
 out=$(mktemp -d)
