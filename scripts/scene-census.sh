@@ -38,7 +38,7 @@ done < <(find "$@" \( -name '*.xml' -o -name '*.pbrt' \) -print0 | sort -z)
 echo
 echo "$ok of $total scene files load and render"
 needing_none=$((total - excluded))
-echo "$ok of $needing_none files that need no media, polarization or hair load ($((100 * ok / needing_none)) %)"
+echo "$ok of $needing_none files that need no unsupported media feature and no polarization load ($((100 * ok / needing_none)) %)"
 for key in "${!reasons[@]}"; do
     printf '%4d  %s\n' "${reasons[$key]}" "$key"
 done | sort -rn | head -25
