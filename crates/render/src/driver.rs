@@ -223,6 +223,11 @@ impl<'a> Renderer<'a> {
             ));
         }
         check_media(scene, settings.algorithm)?;
+        if scene.media.is_active() && settings.vcm_settings().is_some_and(|v| v.radius_mode == RadiusMode::PerPixel) {
+            // cVM of a path through a medium vertex carries the global radius (η_V/η_A = (4/3) r,
+            // `vcm::mis`), so it cannot be rebased to a per-pixel radius.
+            return Err("the per-pixel merging radius is not supported in scenes with media (issue #15)".to_string());
+        }
         let integrator = match (settings.algorithm, settings.vcm_settings()) {
             (_, Some(vcm)) => Integrator::Vcm(Box::new(VcmEngine::new(scene, vcm))),
             (Algorithm::EyeLight, _) => Integrator::EyeLight,
@@ -311,18 +316,16 @@ impl<'a> Renderer<'a> {
 }
 
 /// The error for a scene with participating media or index-matched boundaries that
-/// `algorithm` cannot render: the path tracer, light tracing and bidirectional path tracing
-/// render them (`crate::vcm::medium`); the merging algorithms not yet (issue #15); no
-/// algorithm renders them together with fluorescent materials.
+/// `algorithm` cannot render: the path tracer and all six algorithms of the VCM engine render
+/// homogeneous media (`crate::vcm::medium`; the merging ones with volumetric photon points,
+/// `crate::vcm::mis`), the eye-light preview does not; no algorithm renders them together with
+/// fluorescent materials (issue #15).
 pub fn check_media(scene: &Scene, algorithm: Algorithm) -> Result<(), String> {
     if !scene.media.is_active() {
         return Ok(());
     }
-    if !matches!(
-        algorithm,
-        Algorithm::PathTracing | Algorithm::Vcm(VcmAlgorithm::LightTracing | VcmAlgorithm::BidirectionalPathTracing)
-    ) {
-        return Err("media are rendered by pt, lt and bpt only so far (issue #15)".to_string());
+    if !matches!(algorithm, Algorithm::PathTracing | Algorithm::Vcm(_)) {
+        return Err("media are rendered by pt, lt, bpt, ppm, bpm and vcm only (issue #15)".to_string());
     }
     if algorithm != Algorithm::PathTracing && scene.media.has_heterogeneous() {
         return Err("heterogeneous (grid) media are rendered by pt only so far (issue #15)".to_string());

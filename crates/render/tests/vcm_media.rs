@@ -94,7 +94,13 @@ fn channel_means(scene: &Scene, algorithm: &str, iterations: u64, spectral: bool
         spectral,
         ..RenderSettings::default()
     };
-    let mut renderer = Renderer::new(scene, &settings).unwrap();
+    settings_means(scene, &settings, iterations)
+}
+
+/// Per-iteration per-channel image means of a render with `settings`.
+fn settings_means(scene: &Scene, settings: &RenderSettings, iterations: u64) -> Vec<MeanVar> {
+    let algorithm = settings.algorithm.name();
+    let mut renderer = Renderer::new(scene, settings).unwrap();
     let mut stats = vec![MeanVar::new(); 3];
     for _ in 0..iterations {
         assert_eq!(renderer.step(), 0, "{algorithm}: rejected samples");
@@ -147,6 +153,46 @@ fn bpt_with_media_gives_the_furnace_radiance() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// The merging radius r_0 of the merging furnace runs (camera inside, 32 × 32 pixels).
+const MERGE_RADIUS: f32 = 0.05;
+
+/// ppm, bpm and vcm on the camera-inside furnace: the medium's radiance is 1 everywhere, so
+/// the volume kernel (radius r) is exact except where its ball leaves the sphere. A camera
+/// vertex at depth δ < r below the boundary (a plane at r ≪ 1) loses the fraction
+/// (r − δ)²(2r + δ)/(4r³) of its ball; integrated over δ that is (3/16) r per unit density of
+/// vertices per depth. ppm merges at the first collision, whose density per depth at the
+/// boundary (distance 1 from the camera) is σ e^{−σ} ≤ 1/e per channel: the bias is at most
+/// (3/16) r/e, asserted below 1/4 of the 3 % the test must detect. bpm and vcm merge at later
+/// vertices too, but with MIS weights below 1 and no denser near the wall.
+#[test]
+fn merging_with_media_gives_the_furnace_radiance() {
+    let bias_bound = 3.0 / 16.0 * f64::from(MERGE_RADIUS) / std::f64::consts::E;
+    assert!(bias_bound < POWER / 4.0, "kernel bias bound {bias_bound}");
+    // (algorithm, iterations, spectral)
+    let runs: [(&str, u64, bool); 4] =
+        [("ppm", 6000, false), ("bpm", 5000, false), ("vcm", 100, false), ("vcm", 60, true)];
+    let alpha = sidak(1e-3, runs.len());
+    let scene = furnace(32, true);
+    let mut failures = Vec::new();
+    for (i, &(name, iterations, spectral)) in runs.iter().enumerate() {
+        let mut settings = RenderSettings {
+            algorithm: Algorithm::from_name(name).unwrap(),
+            budget: Budget::Iterations(iterations),
+            max_length: MAX_LENGTH,
+            seed: 301 + i as u64,
+            spectral,
+            radius_alpha: 1.0,
+            ..RenderSettings::default()
+        };
+        let unit = render::vcm::base_radius(&scene, &settings.vcm_settings().unwrap()) / settings.radius_factor;
+        settings.radius_factor = MERGE_RADIUS / unit;
+        let stats = settings_means(&scene, &settings, iterations);
+        let what = format!("{name}{} inside", if spectral { " spectral" } else { "" });
+        failures.extend(judge(&what, &stats, &[1.0; 3], alpha));
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
 #[test]
 fn lt_with_media_gives_the_furnace_radiance_without_unscattered_light() {
     let scene = furnace(16, false);
@@ -159,13 +205,16 @@ fn lt_with_media_gives_the_furnace_radiance_without_unscattered_light() {
 fn refusals_name_the_issue() {
     let outside = furnace(4, false);
     let inside = furnace(4, true);
-    let cases = [(&outside, "ppm"), (&outside, "bpm"), (&inside, "vcm")];
-    for (scene, name) in cases {
-        let settings = RenderSettings { algorithm: Algorithm::from_name(name).unwrap(), ..RenderSettings::default() };
-        let error = Renderer::new(scene, &settings).err().expect("refused");
-        assert!(error.contains("issue #15"), "{name}: {error}");
-    }
-    for (scene, name) in [(&outside, "lt"), (&inside, "lt"), (&inside, "bpt")] {
+    let settings = RenderSettings {
+        algorithm: Algorithm::from_name("vcm").unwrap(),
+        radius_mode: render::vcm::RadiusMode::PerPixel,
+        ..RenderSettings::default()
+    };
+    let error = Renderer::new(&inside, &settings).err().expect("per-pixel radius refused");
+    assert!(error.contains("issue #15"), "{error}");
+    let accepted =
+        [(&outside, "lt"), (&inside, "lt"), (&inside, "bpt"), (&outside, "ppm"), (&outside, "bpm"), (&inside, "vcm")];
+    for (scene, name) in accepted {
         let settings = RenderSettings { algorithm: Algorithm::from_name(name).unwrap(), ..RenderSettings::default() };
         assert!(Renderer::new(scene, &settings).is_ok(), "{name}");
     }
@@ -253,20 +302,54 @@ fn fog_room(resolution: u32) -> Scene {
 /// in the image mean (the blocks alone are noisier).
 #[test]
 fn bpt_matches_pt_per_block_in_a_fog_room() {
+    matches_pt_per_block_in_a_fog_room("bpt", 0.003, 300, 600);
+}
+
+/// The radius factors of the merging runs: r_0 = factor × 2 (the room's radius) × 16 (the
+/// 32² image against the 512² reference), about 1 and 0.6 scene units, so that merges
+/// (mostly at medium vertices: the volume η_V = (4/3) π r³ N grows as r³) carry a large
+/// share of the image and a wrong η of a medium vertex in the MIS would show; the kernel bias
+/// of such radii stays below what the tests see in this smooth fog (measured, not bounded).
+const VCM_RADIUS_FACTOR: f32 = 0.03;
+const BPM_RADIUS_FACTOR: f32 = 0.02;
+
+/// vcm against pt as bpt is (merges at surface and at medium vertices).
+#[test]
+fn vcm_matches_pt_per_block_in_a_fog_room() {
+    matches_pt_per_block_in_a_fog_room("vcm", VCM_RADIUS_FACTOR, 300, 600);
+}
+
+/// bpm against pt: merging is its only technique besides purely specular emitter hits.
+#[test]
+fn bpm_matches_pt_per_block_in_a_fog_room() {
+    matches_pt_per_block_in_a_fog_room("bpm", BPM_RADIUS_FACTOR, 3000, 3000);
+}
+
+/// The same with ten times the samples (power about 1 %).
+#[test]
+#[ignore = "slow: vcm and bpm against pt in the fog room with 10x the samples"]
+fn vcm_and_bpm_match_pt_per_block_in_a_fog_room_long() {
+    matches_pt_per_block_in_a_fog_room("vcm", VCM_RADIUS_FACTOR, 3000, 6000);
+    matches_pt_per_block_in_a_fog_room("bpm", BPM_RADIUS_FACTOR, 20000, 6000);
+}
+
+/// `algorithm` (`iterations`) against pt (`pt_iterations`) in the fog room, per block and in
+/// the image mean, with the power to see a 5 % bias of the image mean.
+fn matches_pt_per_block_in_a_fog_room(algorithm: &str, radius_factor: f32, iterations: u64, pt_iterations: u64) {
     let scene = fog_room(32);
     let run = |algorithm: &str, iterations: u64, seed: u64| {
-        let settings = RenderSettings { max_length: 8, ..common::settings(algorithm, seed) };
+        let settings = RenderSettings { max_length: 8, radius_factor, ..common::settings(algorithm, seed) };
         common::block_estimate(&scene, &settings, iterations, 8)
     };
-    let pt = run("pt", 600, 5);
-    let bpt = run("bpt", 300, 6);
+    let pt = run("pt", pt_iterations, 5);
+    let bpt = run(algorithm, iterations, 6);
     let outcome = z_test_entries(&bpt.means, &bpt.std_errors, &pt.means, &pt.std_errors, 1e-3);
-    eprintln!("fog room, bpt vs pt per block: {outcome}");
+    eprintln!("fog room, {algorithm} vs pt per block: {outcome}");
     assert!(outcome.passed, "{outcome}");
     let keep = vec![true; bpt.means.len() / 3];
     let ((bm, be), (pm, pe)) = (bpt.pooled(&keep), pt.pooled(&keep));
     let detectable = common::detectable_bias(&bm, &be, &pm, &pe, 1e-3);
-    eprintln!("image means bpt {bm:?} ± {be:?}, pt {pm:?} ± {pe:?}; detects {:.2} %", 100.0 * detectable);
+    eprintln!("image means {algorithm} {bm:?} ± {be:?}, pt {pm:?} ± {pe:?}; detects {:.2} %", 100.0 * detectable);
     assert!(z_test_entries(&bm, &be, &pm, &pe, 1e-3).passed, "image means differ");
     assert!(detectable < 0.05, "no power: detects only {:.2} %", 100.0 * detectable);
 }

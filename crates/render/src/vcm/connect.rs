@@ -97,7 +97,7 @@ pub fn connect_to_camera<S: SpectralMode>(
     let weight_for = |k: &MisConstants| {
         if weighted {
             let light_mis = if it.rebase() { light.mis.for_constants(k) } else { light.mis };
-            mis::camera_connection_weight(&light_mis, mis_pdf_a, reverse, k)
+            mis::camera_connection_weight_at(&light_mis, mis_pdf_a, reverse, k, k.eta_scale(scatterer.is_medium()))
         } else {
             1.0
         }
@@ -225,7 +225,7 @@ pub fn next_event<S: SpectralMode>(
         };
         pdfs.bsdf_forward_w *= segment.forward;
         pdfs.cos_at_vertex *= segment.reverse;
-        let weight = mis::nee_weight(&camera.mis, &pdfs, k);
+        let weight = mis::nee_weight_at(&camera.mis, &pdfs, k, k.eta_scale(scatterer.is_medium()));
         let emitted = scene.emission::<S>(index, wavelengths, direct.radiance) * segment.transmittance;
         let value =
             end.receive(camera, eval.value, emitted, rng, wavelengths) * (weight * eval.cos_generated / pdfs.direct_w);
@@ -294,7 +294,8 @@ pub fn connect_vertices<S: SpectralMode>(
         light_reverse_w: light_eval.reverse * light.record.continuation(),
     };
     let light_mis = light.record.mis(k);
-    let weight = mis::connection_weight(&light_mis, &camera.mis, &pdfs, k);
+    let eta_scale = [k.eta_scale(light_medium.is_some()), k.eta_scale(scatterer.is_medium())];
+    let weight = mis::connection_weight_at(&light_mis, &camera.mis, &pdfs, k, eta_scale);
     let geometry = camera_eval.cos_generated * light_eval.cos_generated * inv_d2;
     let both_terminated = camera.terminated && light.record.terminated();
     let scale = if both_terminated { S::DOUBLE_TERMINATION } else { 1.0 };

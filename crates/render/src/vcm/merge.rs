@@ -130,6 +130,9 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
         MergeScope::Group(group) => k.vm_normalization * group.normalization_scale,
         MergeScope::All | MergeScope::AcrossGroups(..) => k.vm_normalization,
     };
+    // A medium vertex merges with the 3-D kernel 1/((4/3) π r³ N_VM) (Křivánek et al. 2014,
+    // point–point): the area normalisation times η_A/η_V.
+    let normalization = if scatterer.is_medium() { normalization / k.volume_over_area } else { normalization };
     // The MIS-weighted value of merging with `light` at wavelengths `w` (before the camera
     // sub-path's throughput and the kernel normalisation), or `None` when it does not count.
     let part = |light: &MergeRecord<S>, w: &S::Wavelengths| -> Option<S> {
@@ -150,13 +153,26 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
                 // Russian roulette would have governed it.
                 let forward = eval.forward * continuation;
                 let reverse = eval.reverse * light.continuation();
-                mis::merge_weight(&light_mis, &camera.mis, forward, reverse, k)
+                if scatterer.is_medium() {
+                    mis::merge_weight_in_medium(&light_mis, &camera.mis, forward, reverse, k)
+                } else {
+                    mis::merge_weight(&light_mis, &camera.mis, forward, reverse, k)
+                }
             }
         };
         let weight = if camera.terminated && light.terminated() { weight * S::DOUBLE_TERMINATION } else { weight };
         let scattered = match label {
             None => scatterer.spectral::<S>(w, eval.value) * light.throughput,
             Some((f, label)) => f.apply_slots(w, label, eval.value, light.throughput),
+        };
+        // The merged path has one vertex where the two sub-paths' vertices meet, but both
+        // throughputs took σ_s of their free flight: divide one out (the volume photon map's
+        // 1/σ_s(x), Jensen and Christensen 1998).
+        let scattered = match scatterer {
+            Scatterer::Medium(m, _) => {
+                scattered * m.coefficients::<S>(w).sigma_s.map(|s| if s > 0.0 { 1.0 / s } else { 0.0 })
+            }
+            Scatterer::Surface(_) => scattered,
         };
         Some(scattered * weight)
     };

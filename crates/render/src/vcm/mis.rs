@@ -6,6 +6,31 @@
 //! All weights use the balance heuristic (β = 1). Pdfs passed in here already include light
 //! selection and Russian roulette where the caller's documentation says so. Everything is a
 //! pure function of its arguments, so the MIS oracle test can drive it with explicit pdfs.
+//!
+//! **Medium vertices** (volumetric photon points, the point–point estimator of Křivánek et
+//! al. 2014). A merge at vertex x accepts the light vertices within r of x: on a surface that
+//! is the disc η_A = N_VM π r² of eq. 20; in a medium, where the vertex densities are volume
+//! densities (`super::medium`), it is the ball η_V = N_VM (4/3) π r³, and the merge divides
+//! by the volume instead of the disc (kernel 1/((4/3) π r³ N_VM)). Every other weight is a
+//! ratio of path pdfs in which a merge at vertex j carries *its own* η_j. The report's
+//! recursion folds one η into global constants; here the quantities stay normalised by
+//! η_A = `eta_vcm` (so a surface-only path computes exactly the same floats as before) and the
+//! ratio η_V/η_A = (4/3) r ([`MisConstants::volume_over_area`]) enters where a medium vertex's
+//! merge is counted:
+//!
+//! - dVCM (eqs. 31, 34): no η (it holds the connection to the vertex and the camera's 1/p).
+//! - dVC (eq. 35) at vertex i−1: the merge at i−1 is `η_VCM` → `η_VCM · η_{i−1}/η_A`.
+//! - dVM (eq. 36) at vertex i−1: the report's `1` is that merge over the merge at i, both
+//!   η_A; with dVM kept relative to η_A it becomes `η_{i−1}/η_A`; cVM (eq. 61) likewise.
+//!   cVC (eq. 60) has none. ([`SubPathMis::scatter_medium`].)
+//! - Connections (eqs. 40, 41, 45, 46): the `η_VCM` term is the merge at the connected light
+//!   or camera vertex, scaled by that vertex's η/η_A ([`connection_weight_at`],
+//!   [`nee_weight_at`], [`camera_connection_weight_at`]); an emitter hit (eq. 43) has none.
+//! - Merge at x (eqs. 38, 39): w_light and w_camera are relative to a merge of η_A; relative
+//!   to the merge actually made they are multiplied by η_A/η_x ([`merge_weight_in_medium`]).
+//!
+//! Eqs. 62, 63 rebuild dVC and dVM from cVC and cVM for the *same* radius only: cVM now
+//! holds (4/3) r, so the per-pixel radius (§6.1) is refused in scenes with media.
 
 use math::PI;
 
@@ -32,6 +57,10 @@ pub struct MisConstants {
     /// N_VM, the number of light sub-paths a camera vertex merges with (N_L/K with K wavelength
     /// groups).
     pub merge_path_count: f32,
+    /// η_V/η_A = (4/3) r (scene units): the ratio of a medium vertex's merge acceptance volume
+    /// N_VM (4/3) π r³ to a surface vertex's area N_VM π r² (see "Medium vertices" in the
+    /// module doc).
+    pub volume_over_area: f32,
 }
 
 impl MisConstants {
@@ -59,7 +88,15 @@ impl MisConstants {
             vm_normalization: 1.0 / eta_vcm,
             light_path_count,
             merge_path_count,
+            volume_over_area: 4.0 / 3.0 * radius,
         }
+    }
+
+    /// η of a vertex's type over the surface η_A: 1 on a surface, η_V/η_A = (4/3) r in a
+    /// medium (module doc, "Medium vertices").
+    #[inline]
+    pub fn eta_scale(&self, medium: bool) -> f32 {
+        if medium { self.volume_over_area } else { 1.0 }
     }
 }
 
@@ -173,6 +210,19 @@ impl SubPathMis {
         }
     }
 
+    /// [`SubPathMis::scatter`] at a medium vertex (no cosines, never specular) with solid-angle
+    /// pdfs `forward` and `reverse` (Russian roulette included): eqs. 35, 36, 60, 61 with the
+    /// merge at this vertex counted with its volume η_V = η_A · (4/3) r (module doc).
+    pub fn scatter_medium(&mut self, forward: f32, reverse: f32, k: &MisConstants) {
+        let g_over_p = 1.0 / forward;
+        let v = k.volume_over_area;
+        self.d_vc = g_over_p * (self.d_vc * reverse + self.d_vcm + k.vm_weight * v); // [eq. 35, η_V]
+        self.d_vm = g_over_p * (self.d_vm * reverse + self.d_vcm * k.vc_weight + v); // [eq. 36, η_V/η_A]
+        self.c_vc = g_over_p * (self.c_vc * reverse + self.d_vcm); // [tech. rep. eq. 60]
+        self.c_vm = g_over_p * (self.c_vm * reverse + v); // [eq. 61, η_V/η_A]
+        self.d_vcm = 1.0 / forward; // [tech. rep. eq. 34]
+    }
+
     /// The same vertex weighted for other constants (another radius): dVC and dVM rebuilt from
     /// cVC and cVM (eqs. 62, 63), restricted to the enabled techniques.
     pub fn for_constants(&self, k: &MisConstants) -> Self {
@@ -213,12 +263,18 @@ pub struct NeePdfs {
 
 /// Weight of next-event estimation (s = 1; eqs. 44, 45, 37).
 pub fn nee_weight(camera: &SubPathMis, p: &NeePdfs, k: &MisConstants) -> f32 {
+    nee_weight_at(camera, p, k, 1.0)
+}
+
+/// [`nee_weight`] at a camera vertex whose merge η is `eta_scale` · η_A
+/// ([`MisConstants::eta_scale`]).
+pub fn nee_weight_at(camera: &SubPathMis, p: &NeePdfs, k: &MisConstants, eta_scale: f32) -> f32 {
     // Both densities are on the light, so their area conversions cancel: a ratio of solid-angle
     // densities at the camera vertex.
     let w_light = p.bsdf_forward_w / p.direct_w; // [tech. rep. eq. 44]
     // p0_trace/p0_connect as a ratio of area densities at the light.
     let trace_over_connect = p.emission_w * p.cos_at_vertex / (p.direct_w * p.cos_at_light);
-    let w_camera = trace_over_connect * (k.vm_weight + camera.d_vcm + camera.d_vc * p.bsdf_reverse_w); // [tech. rep. eq. 45]
+    let w_camera = trace_over_connect * (k.vm_weight * eta_scale + camera.d_vcm + camera.d_vc * p.bsdf_reverse_w); // [tech. rep. eq. 45]
     1.0 / (w_light + 1.0 + w_camera) // [tech. rep. eq. 37]
 }
 
@@ -239,8 +295,20 @@ pub struct ConnectionPdfs {
 
 /// Weight of a vertex connection (s, t > 1; eqs. 40, 41, 37).
 pub fn connection_weight(light: &SubPathMis, camera: &SubPathMis, p: &ConnectionPdfs, k: &MisConstants) -> f32 {
-    let w_light = p.camera_forward_a * (k.vm_weight + light.d_vcm + light.d_vc * p.light_reverse_w); // [tech. rep. eq. 40]
-    let w_camera = p.light_forward_a * (k.vm_weight + camera.d_vcm + camera.d_vc * p.camera_reverse_w); // [tech. rep. eq. 41]
+    connection_weight_at(light, camera, p, k, [1.0, 1.0])
+}
+
+/// [`connection_weight`] with the merge η of the light and the camera vertex `eta_scale`
+/// (`[light, camera]`) times η_A ([`MisConstants::eta_scale`]).
+pub fn connection_weight_at(
+    light: &SubPathMis,
+    camera: &SubPathMis,
+    p: &ConnectionPdfs,
+    k: &MisConstants,
+    eta_scale: [f32; 2],
+) -> f32 {
+    let w_light = p.camera_forward_a * (k.vm_weight * eta_scale[0] + light.d_vcm + light.d_vc * p.light_reverse_w); // [tech. rep. eq. 40]
+    let w_camera = p.light_forward_a * (k.vm_weight * eta_scale[1] + camera.d_vcm + camera.d_vc * p.camera_reverse_w); // [tech. rep. eq. 41]
     1.0 / (w_light + 1.0 + w_camera) // [tech. rep. eq. 37]
 }
 
@@ -249,7 +317,20 @@ pub fn connection_weight(light: &SubPathMis, camera: &SubPathMis, p: &Connection
 /// density 1 per pixel, converted to area at the vertex); `light_reverse_w` the light BSDF's
 /// reverse density (Russian roulette included).
 pub fn camera_connection_weight(light: &SubPathMis, camera_pdf_a: f32, light_reverse_w: f32, k: &MisConstants) -> f32 {
-    let w_light = camera_pdf_a / k.light_path_count * (k.vm_weight + light.d_vcm + light.d_vc * light_reverse_w); // [tech. rep. eq. 46]
+    camera_connection_weight_at(light, camera_pdf_a, light_reverse_w, k, 1.0)
+}
+
+/// [`camera_connection_weight`] at a light vertex whose merge η is `eta_scale` · η_A
+/// ([`MisConstants::eta_scale`]).
+pub fn camera_connection_weight_at(
+    light: &SubPathMis,
+    camera_pdf_a: f32,
+    light_reverse_w: f32,
+    k: &MisConstants,
+    eta_scale: f32,
+) -> f32 {
+    let w_light =
+        camera_pdf_a / k.light_path_count * (k.vm_weight * eta_scale + light.d_vcm + light.d_vc * light_reverse_w); // [tech. rep. eq. 46]
     1.0 / (w_light + 1.0) // [tech. rep. eq. 37] with w_camera = 0 [eq. 47]
 }
 
@@ -267,4 +348,19 @@ pub fn merge_weight(
     let w_light = light.d_vcm * k.vc_weight + light.d_vm * camera_forward_w; // [tech. rep. eq. 38]
     let w_camera = camera.d_vcm * k.vc_weight + camera.d_vm * camera_reverse_w; // [tech. rep. eq. 39]
     1.0 / (w_light + 1.0 + w_camera) // [tech. rep. eq. 37]
+}
+
+/// [`merge_weight`] at a medium vertex: every other technique relative to a merge whose
+/// acceptance is the volume η_V, not the area η_A the quantities are normalised by (dVM and
+/// the 1/η_VCM of eqs. 38, 39 are relative to η_A), so `w_light + w_camera` is scaled by η_A/η_V.
+pub fn merge_weight_in_medium(
+    light: &SubPathMis,
+    camera: &SubPathMis,
+    camera_forward_w: f32,
+    camera_reverse_w: f32,
+    k: &MisConstants,
+) -> f32 {
+    let w_light = light.d_vcm * k.vc_weight + light.d_vm * camera_forward_w; // [tech. rep. eq. 38]
+    let w_camera = camera.d_vcm * k.vc_weight + camera.d_vm * camera_reverse_w; // [tech. rep. eq. 39]
+    1.0 / (1.0 + (w_light + w_camera) / k.volume_over_area) // [eq. 37, η_A/η_V]
 }

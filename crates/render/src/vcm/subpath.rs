@@ -130,7 +130,7 @@ impl<S: SpectralMode> SubPath<S> {
             return false;
         }
         let pdf = sample.pdf * continuation;
-        self.mis.scatter(1.0, pdf, pdf, false, k);
+        self.mis.scatter_medium(pdf, pdf, k);
         self.throughput *= 1.0 / continuation;
         self.specular_path = false;
         self.ray = Ray::new(position, sample.direction);
