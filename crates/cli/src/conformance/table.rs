@@ -179,9 +179,9 @@ impl Table {
              git clone --depth 1 https://github.com/mitsuba-renderer/mitsuba-data\n\
              vcm conformance mitsuba-data/tests/scenes --markdown docs/conformance.md\n\
              ```\n\n\
-             (`mitsuba-data/tests/common` must sit beside `mitsuba-data/tests/scenes`.) Scenes with \
-             participating media are rendered by `pt` only so far (issue #15); the other algorithms \
-             report that as an error."
+             (`mitsuba-data/tests/common` must sit beside `mitsuba-data/tests/scenes`.) Grid \
+             (heterogeneous) media are rendered by `pt` only so far (issue #15); the other \
+             algorithms report that as an error."
         );
         md
     }
