@@ -12,19 +12,16 @@
 //! Every check compares a mean with its standard error (fixed seeds, |z| < 4.5) and shows that
 //! the same data reject a truth scaled by 1.02 (tracking) or 1.03 (furnace).
 
+mod common;
+
 use std::sync::Arc;
 
+use common::medium_sphere::{View, medium_sphere};
 use math::{Ray, Rng, Vec3};
 use render::path_tracer::PathTracer;
 use scene::Scene;
-use scene::desc::{CameraDesc, FilmDesc, FilterDesc, Geometry, LightDesc, Projection, SceneDescription, ShapeDesc};
 use scene::instance::Affine3A;
-use scene::material::Material;
-use scene::medium::{
-    Coefficient, Coefficients, Filter, Grid, Heterogeneous, MediaDesc, Medium, MediumInterface, Outside, PhaseFunction,
-    Volume,
-};
-use scene::texture::Texture;
+use scene::medium::{Coefficient, Coefficients, Filter, Grid, Heterogeneous, Medium, Outside, PhaseFunction, Volume};
 use spectrum::Rgb;
 
 const Z_LIMIT: f64 = 4.5;
@@ -147,38 +144,10 @@ fn delta_tracking_is_unbiased_per_channel() {
     }
 }
 
-/// An index-matched sphere of radius 1 filled with `medium`, under a uniform environment of
-/// radiance 1.
+/// The unit sphere of `medium` seen from (0, 0, −5) under a uniform environment of radiance 1.
 fn sphere_scene(medium: Medium) -> Scene {
-    let mut media = MediaDesc { media: vec![medium], null_materials: vec![0], ..Default::default() };
-    media.shapes.insert(0, MediumInterface { interior: Some(0), exterior: None });
-    let desc = SceneDescription {
-        name: "heterogeneous sphere".into(),
-        camera: CameraDesc {
-            position: Vec3::new(0.0, 0.0, -5.0),
-            forward: Vec3::Z,
-            up: Vec3::Y,
-            right: Vec3::X,
-            projection: Projection::Perspective { horizontal_fov_degrees: 30.0 },
-        },
-        film: FilmDesc { width: 4, height: 4, filter: FilterDesc::Box },
-        materials: vec![Material::Diffuse { reflectance: Texture::Constant(Rgb::BLACK) }],
-        shapes: vec![ShapeDesc {
-            name: "sphere".into(),
-            geometry: Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false },
-            material: 0,
-            emission: None,
-            alpha: None,
-        }],
-        lights: vec![LightDesc::Constant { radiance: Rgb::splat(1.0) }],
-        max_path_length: None,
-        warnings: Vec::new(),
-        emission_spectra: Default::default(),
-        objects: Vec::new(),
-        instances: Vec::new(),
-        media,
-    };
-    Scene::from_description(&desc, None).unwrap().0
+    let view = View { position: Vec3::new(0.0, 0.0, -5.0), inside: false, fov_degrees: 30.0, resolution: 4 };
+    medium_sphere(medium, view, false)
 }
 
 /// A chromatic 4×4×4 grid (values 0.2 … 4.1, varying per channel) over [−1, 1]³, albedo 1

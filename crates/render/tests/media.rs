@@ -13,69 +13,28 @@
 //! standard error (fixed seeds, |z| < 4.5 for every channel), and shows that the same data
 //! reject a truth scaled by 1.03 (the power of the test).
 
+mod common;
+
+use common::medium_sphere::{View, medium_sphere};
 use math::{Ray, Rng, Vec3};
 use render::driver::{Algorithm, RenderSettings, Renderer};
 use render::path_tracer::PathTracer;
 use render::vcm::VcmAlgorithm;
 use render::volumetric::shadow_transmittance;
 use scene::Scene;
-use scene::desc::{CameraDesc, FilmDesc, FilterDesc, Geometry, LightDesc, Projection, SceneDescription, ShapeDesc};
-use scene::material::Material;
-use scene::medium::{Coefficient, Coefficients, MediaDesc, Medium, MediumInterface, PhaseFunction};
-use scene::texture::Texture;
+use scene::medium::{Coefficient, Coefficients, Medium, PhaseFunction};
 use spectrum::Rgb;
 
 const Z_LIMIT: f64 = 4.5;
 
-/// The sphere of `medium` (index-matched boundary) under a uniform environment of radiance 1.
-fn sphere_scene(medium: Medium) -> Scene {
-    shelled_sphere_scene(medium, false)
+/// The unit sphere of `medium` seen from (0, 0, −5), optionally inside a thin dielectric shell.
+fn shelled_sphere_scene(medium: Medium, shell: bool) -> Scene {
+    let view = View { position: Vec3::new(0.0, 0.0, -5.0), inside: false, fov_degrees: 30.0, resolution: 4 };
+    medium_sphere(medium, view, shell)
 }
 
-/// [`sphere_scene`], with a lossless thin dielectric shell of radius 1.2 around the medium
-/// sphere when `shell` is set (vacuum between them).
-fn shelled_sphere_scene(medium: Medium, shell: bool) -> Scene {
-    let mut media = MediaDesc { media: vec![medium], null_materials: vec![0], ..Default::default() };
-    media.shapes.insert(0, MediumInterface { interior: Some(0), exterior: None });
-    let desc = SceneDescription {
-        name: "medium sphere".into(),
-        camera: CameraDesc {
-            position: Vec3::new(0.0, 0.0, -5.0),
-            forward: Vec3::Z,
-            up: Vec3::Y,
-            right: Vec3::X,
-            projection: Projection::Perspective { horizontal_fov_degrees: 30.0 },
-        },
-        film: FilmDesc { width: 4, height: 4, filter: FilterDesc::Box },
-        materials: vec![
-            Material::Diffuse { reflectance: Texture::Constant(Rgb::BLACK) },
-            Material::ThinDielectric {
-                int_ior: 1.5,
-                ext_ior: 1.0,
-                specular_reflectance: Texture::Constant(Rgb::WHITE),
-                specular_transmittance: Texture::Constant(Rgb::WHITE),
-            },
-        ],
-        shapes: [(1.0, 0), (1.2, 1)]
-            .into_iter()
-            .take(if shell { 2 } else { 1 })
-            .map(|(radius, material)| ShapeDesc {
-                name: "sphere".into(),
-                geometry: Geometry::Sphere { center: Vec3::ZERO, radius, flip_normals: false },
-                material,
-                emission: None,
-                alpha: None,
-            })
-            .collect(),
-        lights: vec![LightDesc::Constant { radiance: Rgb::splat(1.0) }],
-        max_path_length: None,
-        warnings: Vec::new(),
-        emission_spectra: Default::default(),
-        objects: Vec::new(),
-        instances: Vec::new(),
-        media,
-    };
-    Scene::from_description(&desc, None).unwrap().0
+fn sphere_scene(medium: Medium) -> Scene {
+    shelled_sphere_scene(medium, false)
 }
 
 fn medium(sigma_t: Rgb, albedo: f32, g: f32) -> Medium {

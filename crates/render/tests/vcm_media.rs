@@ -24,11 +24,12 @@
 
 mod common;
 
+use common::medium_sphere::{View, medium_sphere};
 use math::Vec3;
 use render::driver::{Budget, Renderer};
 use render::{Algorithm, RenderSettings};
 use scene::Scene;
-use scene::desc::{CameraDesc, FilmDesc, FilterDesc, Geometry, LightDesc, Projection, SceneDescription, ShapeDesc};
+use scene::desc::{CameraDesc, FilmDesc, FilterDesc, Geometry, Projection, SceneDescription, ShapeDesc};
 use scene::material::Material;
 use scene::medium::{Coefficient, Coefficients, MediaDesc, Medium, MediumInterface, PhaseFunction};
 use scene::texture::Texture;
@@ -52,36 +53,8 @@ fn furnace(resolution: u32, inside: bool) -> Scene {
         scale: 1.0,
         phase: PhaseFunction::henyey_greenstein(0.6).unwrap(),
     };
-    let camera = inside.then_some(0);
-    let mut media = MediaDesc { media: vec![medium], null_materials: vec![0], camera, ..Default::default() };
-    media.shapes.insert(0, MediumInterface { interior: Some(0), exterior: None });
-    let desc = SceneDescription {
-        name: "medium furnace".into(),
-        camera: CameraDesc {
-            position: if inside { Vec3::ZERO } else { CAMERA },
-            forward: Vec3::Z,
-            up: Vec3::Y,
-            right: Vec3::X,
-            projection: Projection::Perspective { horizontal_fov_degrees: 60.0 },
-        },
-        film: FilmDesc { width: resolution, height: resolution, filter: FilterDesc::Box },
-        materials: vec![Material::Diffuse { reflectance: Texture::Constant(Rgb::BLACK) }],
-        shapes: vec![ShapeDesc {
-            name: "sphere".into(),
-            geometry: Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false },
-            material: 0,
-            emission: None,
-            alpha: None,
-        }],
-        lights: vec![LightDesc::Constant { radiance: Rgb::splat(1.0) }],
-        max_path_length: None,
-        warnings: Vec::new(),
-        emission_spectra: Default::default(),
-        objects: Vec::new(),
-        instances: Vec::new(),
-        media,
-    };
-    Scene::from_description(&desc, None).unwrap().0
+    let position = if inside { Vec3::ZERO } else { CAMERA };
+    medium_sphere(medium, View { position, inside, fov_degrees: 60.0, resolution }, false)
 }
 
 /// Per-iteration per-channel image means of `algorithm` on `scene`.

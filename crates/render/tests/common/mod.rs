@@ -3,6 +3,8 @@
 
 #![allow(dead_code)]
 
+pub mod medium_sphere;
+
 use math::Vec2;
 use math::Vec3;
 use render::driver::{Budget, Renderer};
