@@ -99,8 +99,11 @@ impl Bsdf {
     /// with its direction unchanged, when the material is such a *null* interface besides a
     /// delta reflection (Mitsuba 3's `Null` component: the thin dielectric, and blends of thin
     /// dielectrics): `transmittance · (1 − R')` of the fixed direction. `None` for every other
-    /// material. The volumetric path tracer lets shadow rays cross these surfaces with this
-    /// factor, and treats a sampled straight-through transmission of them as no vertex.
+    /// material. The volumetric path tracer asks it only of plain `Material::ThinDielectric`
+    /// surfaces (a cheap material test comes first, since every blocked shadow ray would
+    /// otherwise build a BSDF): their shadow rays cross with this factor, and a sampled
+    /// straight-through transmission of them is no vertex. Blends are not treated as null
+    /// there, on either side, so the MIS weights stay consistent.
     pub fn null_transmission(&self) -> Option<spectrum::Rgb> {
         match &self.inner {
             Inner::Reference(_) => None,
