@@ -37,10 +37,11 @@
 //! every path summing to one.
 //!
 //! Path length counts scattering vertices (surface or medium) as the surface-only tracer
-//! counts surface vertices, except that a specular transmission straight through a surface
-//! (a thin dielectric) does not count: Mitsuba 3 gives its thin dielectric's transmission a
-//! null component, which its volumetric path tracers do not count as a bounce (so a path at
-//! its length limit may still pass straight through one). Fluorescent materials in scenes with media are refused by the
+//! counts surface vertices; a thin dielectric's straight-through transmission is no vertex and
+//! does not count: Mitsuba 3 gives only its thin dielectric's transmission a null component,
+//! which its volumetric path tracers do not count as a bounce (so a path at its length limit
+//! may still pass straight through one). The VCM engine follows the same rule
+//! (`vcm::medium::crosses_as_null`). Fluorescent materials in scenes with media are refused by the
 //! driver (not implemented, issue #15).
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
@@ -49,9 +50,6 @@ use scene::{Bsdf, Material, Scene, SurfaceHit, TransportMode};
 use spectrum::SpectralMode;
 
 use crate::path_tracer::{PathTracer, RussianRoulette};
-
-/// Cosine above which a specular transmission counts as going straight through.
-const STRAIGHT_THROUGH_COS: f32 = 1.0 - 1e-6;
 
 /// Radiance along `camera_ray` in a scene with media (see the module documentation).
 pub(crate) fn radiance<S: SpectralMode>(
@@ -197,7 +195,8 @@ pub(crate) fn radiance<S: SpectralMode>(
             gap = RAY_EPSILON;
             continue;
         }
-        // At the length limit only a straight-through transmission (no bounce) may continue.
+        // At the length limit only a thin dielectric's straight-through transmission (no
+        // vertex) may continue.
         let at_limit = path_length >= max_length;
         let fixed_direction = -ray.direction;
         let Some(bsdf) =
@@ -241,11 +240,9 @@ pub(crate) fn radiance<S: SpectralMode>(
 
         // Continue by BSDF sampling, with Russian roulette.
         let Some(sample) = bsdf.sample(rng.uniform3()) else { break };
-        let straight_through =
-            sample.lobe.is_specular() && sample.direction.dot(-fixed_direction) > STRAIGHT_THROUGH_COS;
         // Through a thin dielectric's null component: no vertex (see the module docs).
-        let null_crossing = straight_through && is_null_interface(scene, &hit);
-        if at_limit && !straight_through {
+        let null_crossing = sample.is_straight_through(fixed_direction) && is_null_interface(scene, &hit);
+        if at_limit && !null_crossing {
             break;
         }
         if continuation < 1.0 && rng.uniform() >= continuation {
@@ -270,11 +267,7 @@ pub(crate) fn radiance<S: SpectralMode>(
         last_pdf = pdf;
         last_specular = sample.lobe.is_specular();
         travelled = RAY_EPSILON;
-        // A specular transmission straight through (a thin dielectric) is not a bounce, as in
-        // Mitsuba 3, whose thin dielectric transmits with a null component.
-        if !straight_through {
-            path_length += 1;
-        }
+        path_length += 1;
     }
     result
 }
@@ -365,17 +358,23 @@ pub fn tracked_transmittance<S: SpectralMode>(
     (!carried.is_black()).then_some(carried)
 }
 
-/// Whether the surface at `hit` is a thin dielectric, whose straight-through transmission the
-/// volumetric walk treats as a null component (module docs).
+/// Whether the surface at `hit` is a thin dielectric that does not emit, whose
+/// straight-through transmission the volumetric walk (and the VCM engine in media) treats as a
+/// null component (module docs). An emitting one stays a vertex, so its emission is counted.
 #[inline]
-fn is_null_interface(scene: &Scene, hit: &SurfaceHit) -> bool {
-    matches!(scene.material(hit), Material::ThinDielectric { .. })
+pub(crate) fn is_null_interface(scene: &Scene, hit: &SurfaceHit) -> bool {
+    hit.light.is_none() && matches!(scene.material(hit), Material::ThinDielectric { .. })
 }
 
 /// The factor (per channel) by which a shadow ray along `direction` crosses the surface at
 /// `hit`: `T·(1 − R')` for a thin dielectric ([`scene::Bsdf::null_transmission`]); `None` for
 /// any other surface, which blocks it.
-fn null_factor<S: SpectralMode>(scene: &Scene, hit: &SurfaceHit, direction: Vec3, w: &S::Wavelengths) -> Option<S> {
+pub(crate) fn null_factor<S: SpectralMode>(
+    scene: &Scene,
+    hit: &SurfaceHit,
+    direction: Vec3,
+    w: &S::Wavelengths,
+) -> Option<S> {
     if !is_null_interface(scene, hit) {
         return None;
     }

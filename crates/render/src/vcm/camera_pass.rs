@@ -13,7 +13,7 @@ use super::light_vertex::LightPath;
 use super::medium::{Arrival, Flight, MediumSide, Scatterer, advance};
 use super::merge::{MergeScope, MergeSource, MergeWeighting, merge};
 use super::mis::{self, SubPathMis};
-use super::subpath::SubPath;
+use super::subpath::{NullSurface, SubPath};
 use super::technique_images::{Record, TechniqueValues};
 use super::wavelengths::MAX_CROSS_GROUPS;
 use super::{Family, FamilyValues, Iteration, Techniques};
@@ -95,6 +95,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         PrimaryDensity::SolidAngle(pdf) => (pdf.0, true),
         PrimaryDensity::Area(pdf) => (pdf.0, false),
     };
+    let media_active = scene.media.is_active();
     let mut path = SubPath {
         ray: primary.ray,
         throughput: S::splat(primary.weight),
@@ -107,7 +108,6 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         slots: S::Slots::default(),
         flight: Flight::start(scene.media.camera, false, 0.0),
     };
-    let media_active = scene.media.is_active();
     // Merging across wavelength groups: the throughput at every group's wavelengths.
     let group_sets = match merge_source.map(|s| s.scope) {
         Some(MergeScope::AcrossGroups(_, sets)) => sets,
@@ -153,6 +153,15 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             }
             break;
         };
+        // A thin dielectric's straight-through transmission is no vertex in media.
+        let mut presampled = None;
+        if media_active {
+            match path.cross_null_surface(scene, &hit, TransportMode::Radiance, hero, rng, w) {
+                NullSurface::Crossed => continue,
+                NullSurface::Stop => break,
+                NullSurface::Vertex(sample) => presampled = sample,
+            }
+        }
         let direction = path.ray.direction;
         let cos_fixed = hit.normal.dot(-direction).abs();
         let distance_squared = path.arrival_distance_squared(hit.distance);
@@ -225,7 +234,8 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                 }
             }
         }
-        let Some(scattered) = path.scatter(&bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true)
+        let Some(scattered) =
+            path.scatter(&bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true, presampled)
         else {
             break;
         };

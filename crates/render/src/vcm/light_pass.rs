@@ -12,7 +12,7 @@ use super::connect::{LightEnd, Splat, connect_to_camera};
 use super::light_vertex::{LightVertex, VertexData};
 use super::medium::{Arrival, Flight, MediumSide, Scatterer, advance};
 use super::mis::SubPathMis;
-use super::subpath::SubPath;
+use super::subpath::{NullSurface, SubPath};
 
 /// Stream selector of the camera connections' generator.
 const CAMERA_CONNECTIONS: u64 = 0x6361_6d65_7261;
@@ -94,6 +94,15 @@ pub fn trace_light_path<S: SpectralMode>(
                 continue;
             }
         };
+        // A thin dielectric's straight-through transmission is no vertex in media.
+        let mut presampled = None;
+        if media_active {
+            match path.cross_null_surface(scene, &hit, TransportMode::Importance, hero, rng, wavelengths) {
+                NullSurface::Crossed => continue,
+                NullSurface::Stop => break,
+                NullSurface::Vertex(sample) => presampled = sample,
+            }
+        }
         let fixed = -path.ray.direction;
         let Some(bsdf) =
             Bsdf::new_at(scene.material(&hit), &hit.shading_point(), fixed, TransportMode::Importance, hero)
@@ -149,7 +158,10 @@ pub fn trace_light_path<S: SpectralMode>(
         if path.path_length + 2 > it.max_length {
             break;
         }
-        if path.scatter(&bsdf, hit.position, rng, false, k, wavelengths, fluorescent.as_ref(), false).is_none() {
+        if path
+            .scatter(&bsdf, hit.position, rng, false, k, wavelengths, fluorescent.as_ref(), false, presampled)
+            .is_none()
+        {
             break;
         }
         path.flight = Flight::start(side.towards(path.ray.direction), false, RAY_EPSILON);

@@ -1,13 +1,13 @@
 //! The state of a random walk (light or camera sub-path) and its scattering step.
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
-use scene::Bsdf;
 use scene::medium::Medium;
+use scene::{Bsdf, BsdfSample, Scene, SurfaceHit, TransportMode};
 use spectrum::{Rgb, SpectralMode};
 
 use crate::fluorescent::{FluorescentVertex, view};
 
-use super::medium::Flight;
+use super::medium::{Flight, crosses_as_null, pass_boundary};
 use super::mis::{MisConstants, SubPathMis};
 
 /// A sub-path being traced, carrying `S` ([`spectrum::Rgb`] or [`spectrum::Hero4`]).
@@ -56,7 +56,8 @@ impl<S: SpectralMode> SubPath<S> {
     }
 
     /// Samples the next direction at `position` from `bsdf` (only its specular lobes when
-    /// `specular_only`), applies Russian roulette, updates throughput and MIS quantities
+    /// `specular_only`; `presampled`, when given, is that sample already drawn, see
+    /// [`SubPath::cross_null_surface`]), applies Russian roulette, updates throughput and MIS quantities
     /// (eqs. 34–36, 53–55) and prepares the next ray. At a fluorescent vertex a label is drawn
     /// and applied as a light sub-path (`camera` false: by slot) or as a camera sub-path does.
     /// Returns what scattering multiplied the throughput by, or `None` when the walk ends.
@@ -71,10 +72,15 @@ impl<S: SpectralMode> SubPath<S> {
         wavelengths: &S::Wavelengths,
         fluorescent: Option<&FluorescentVertex>,
         camera: bool,
+        presampled: Option<BsdfSample>,
     ) -> Option<Scattered> {
-        let u = rng.uniform3();
-        let sample = if specular_only { bsdf.sample_specular(u) } else { bsdf.sample(u) };
-        let sample = sample?;
+        let sample = match presampled {
+            Some(sample) => sample,
+            None => {
+                let u = rng.uniform3();
+                if specular_only { bsdf.sample_specular(u) } else { bsdf.sample(u) }?
+            }
+        };
         let continuation = bsdf.continuation_probability();
         if continuation < 1.0 && rng.uniform() >= continuation {
             return None;
@@ -138,6 +144,58 @@ impl<S: SpectralMode> SubPath<S> {
         self.flight = Flight::start(Some(index), true, 0.0);
         self.path_length += 1;
         true
+    }
+}
+
+/// What [`SubPath::cross_null_surface`] did at a surface.
+#[derive(Clone, Copy, Debug)]
+pub enum NullSurface {
+    /// The sub-path went straight through: no vertex, the segment goes on.
+    Crossed,
+    /// The surface is a vertex; for a thin dielectric, with the (reflection) sample already
+    /// drawn, to pass to [`SubPath::scatter`].
+    Vertex(Option<BsdfSample>),
+    /// The walk ends (no BSDF, no sample, or Russian roulette).
+    Stop,
+}
+
+impl<S: SpectralMode> SubPath<S> {
+    /// At a surface `hit` in a scene with media: a thin dielectric that
+    /// [`crosses_as_null`] samples its BSDF (built for `mode` at the `hero` wavelength in
+    /// spectral mode); a
+    /// straight-through transmission is no vertex, as in the volumetric path tracer: the
+    /// throughput takes `f·cos/p` (and the BSDF's Russian roulette) and the ray continues the
+    /// segment through the surface ([`pass_boundary`]), so the pdfs of the last vertex and the
+    /// distance to the next one span the crossing. Any other surface is a vertex.
+    #[allow(clippy::too_many_arguments)]
+    pub fn cross_null_surface(
+        &mut self,
+        scene: &Scene,
+        hit: &SurfaceHit,
+        mode: TransportMode,
+        hero: Option<f32>,
+        rng: &mut Rng,
+        wavelengths: &S::Wavelengths,
+    ) -> NullSurface {
+        if !crosses_as_null(scene, hit) {
+            return NullSurface::Vertex(None);
+        }
+        let fixed = -self.ray.direction;
+        let Some(bsdf) = Bsdf::new_at(scene.material(hit), &hit.shading_point(), fixed, mode, hero) else {
+            return NullSurface::Stop;
+        };
+        let Some(sample) = bsdf.sample(rng.uniform3()) else { return NullSurface::Stop };
+        if !sample.is_straight_through(fixed) {
+            return NullSurface::Vertex(Some(sample));
+        }
+        let continuation = bsdf.continuation_probability();
+        if continuation < 1.0 && rng.uniform() >= continuation {
+            return NullSurface::Stop;
+        }
+        let scale = sample.cos_generated / (sample.pdf.forward.0 * continuation);
+        self.throughput *= view(&self.slots, S::from_reflectance(wavelengths, sample.value)) * scale;
+        pass_boundary(scene, hit, &mut self.ray, &mut self.origin_offset, &mut self.flight);
+        NullSurface::Crossed
     }
 }
 

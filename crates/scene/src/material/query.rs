@@ -68,3 +68,19 @@ pub struct BsdfSample {
     /// cannot take this direction, so the path continues at the hero wavelength only.
     pub dispersive: bool,
 }
+
+/// `cos` between a sampled direction and the incoming ray's direction above which a specular
+/// sample counts as passing straight through (see [`BsdfSample::is_straight_through`]).
+pub const STRAIGHT_THROUGH_COS: f32 = 1.0 - 1e-6;
+
+impl BsdfSample {
+    /// True for a specular sample that continues in the direction the ray arrived in, i.e.
+    /// along `-fixed` (`fixed`: the unit direction back along the arriving ray), within
+    /// [`STRAIGHT_THROUGH_COS`]: a thin dielectric's transmission, or a refraction between
+    /// equal indices. Mitsuba 3 gives its thin dielectric's transmission a *null* component,
+    /// which its volumetric path tracers do not count as a bounce; ours (pt and the VCM
+    /// engine, in scenes with media) follow it with this test.
+    pub fn is_straight_through(&self, fixed: Vec3) -> bool {
+        self.lobe.is_specular() && self.direction.dot(-fixed) > STRAIGHT_THROUGH_COS
+    }
+}
