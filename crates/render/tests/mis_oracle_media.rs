@@ -25,276 +25,18 @@
 
 #[path = "common/medium_sphere.rs"]
 mod medium_sphere;
+#[path = "common/mis_media_path.rs"]
+mod mis_media_path;
 #[path = "common/mis_surface.rs"]
 mod mis_surface;
 
-use math::{PI, Rng, Vec3};
+use math::{Rng, Vec3};
 use medium_sphere::{View, medium_sphere};
-use mis_surface::{facing_normal, materials, random_unit, reference_bsdf};
+use mis_media_path::{LightKind, Piece, TestPath, media, random_medium};
 use render::vcm::medium::{Flight, flight_density, pass_probability, segment};
 use render::vcm::mis::{self, ConnectionPdfs, MisConstants, NeePdfs, SubPathMis};
-use scene::material::fresnel_dielectric;
-use scene::medium::{Coefficient, Coefficients, Medium, PhaseFunction};
-use scene::{Camera, ReferenceMaterial, TransportMode};
+use scene::medium::{Coefficient, Coefficients, Medium};
 use spectrum::Rgb;
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum LightKind {
-    Area,
-    Point,
-    Directional,
-    Environment,
-}
-
-impl LightKind {
-    fn is_delta(self) -> bool {
-        matches!(self, LightKind::Point | LightKind::Directional)
-    }
-    fn is_finite(self) -> bool {
-        matches!(self, LightKind::Area | LightKind::Point)
-    }
-}
-
-/// A homogeneous medium of the test: extinction per RGB channel (1/scene unit), phase
-/// function, Russian-roulette continuation probability at its vertices.
-struct TestMedium {
-    sigma_t: [f32; 3],
-    phase: PhaseFunction,
-    continuation: f32,
-}
-
-fn media() -> [TestMedium; 3] {
-    [
-        TestMedium { sigma_t: [0.5, 1.0, 2.0], phase: PhaseFunction::Isotropic, continuation: 0.9 },
-        TestMedium { sigma_t: [1.5, 0.4, 0.0], phase: PhaseFunction::HenyeyGreenstein { g: 0.7 }, continuation: 0.75 },
-        TestMedium { sigma_t: [0.8, 0.8, 0.8], phase: PhaseFunction::HenyeyGreenstein { g: -0.4 }, continuation: 1.0 },
-    ]
-}
-
-/// An inner vertex.
-#[derive(Clone, Copy, Debug)]
-enum Vertex {
-    /// On a surface with this normal and material.
-    Surface(Vec3, ReferenceMaterial),
-    /// A scattering event in medium `usize`.
-    Medium(usize),
-}
-
-/// A piece of a segment: its length and medium (`None`: vacuum).
-#[derive(Clone, Copy, Debug)]
-struct Piece {
-    length: f32,
-    medium: Option<usize>,
-}
-
-struct TestPath {
-    light: LightKind,
-    /// x0…xk (x0 unused for infinite lights).
-    x: Vec<Vec3>,
-    /// Inner vertices at 1…k−1 (0 and k: placeholders).
-    vertex: Vec<Vertex>,
-    /// Normal of the area light at x0.
-    light_normal: Vec3,
-    /// Pieces of segment i (x_{i−1} to x_i), ordered from x_{i−1}; index 0 unused.
-    pieces: Vec<Vec<Piece>>,
-    /// Unit direction from x1 towards an infinite light.
-    light_direction: Vec3,
-    camera: Camera,
-    light_area: f32,
-}
-
-const PICK: f32 = 0.5;
-const SCENE_RADIUS: f32 = 3.0;
-
-impl TestPath {
-    fn k(&self) -> usize {
-        self.x.len() - 1
-    }
-
-    /// A random path of `k` segments, built by a walk from the camera that samples every
-    /// direction from the vertex's BSDF or phase function (so none is zero); the camera sits
-    /// in `camera_medium`.
-    fn random(k: usize, light: LightKind, camera_medium: Option<usize>, rng: &mut Rng) -> Option<TestPath> {
-        let all = materials();
-        let media = media();
-        let camera_position = Vec3::new(0.0, -3.0, 0.5);
-        let first = (Vec3::new(0.1, 1.0, -0.05) + 0.2 * random_unit(rng)).normalize();
-        let forward = (first + 0.15 * random_unit(rng)).normalize();
-        let camera = Camera::new(camera_position, forward, Vec3::Z, 60.0, 64, 64);
-        let mut rev_x = vec![camera_position];
-        let mut rev_v = vec![Vertex::Medium(usize::MAX)];
-        let mut direction = first;
-        for _ in 1..k {
-            let position = *rev_x.last().unwrap() + direction * (0.5 + rng.uniform() * 1.5);
-            let vertex = if rng.uniform() < 0.5 {
-                let m = (rng.uniform() * 3.0) as usize % 3;
-                direction = media[m].phase.sample(-direction, rng.uniform2()).direction;
-                Vertex::Medium(m)
-            } else {
-                let normal = facing_normal(-direction, rng);
-                let material = all[(rng.uniform() * 4.0) as usize % 4];
-                let bsdf = reference_bsdf(&material, normal, -direction, TransportMode::Radiance)?;
-                direction = bsdf.sample(rng.uniform3())?.direction;
-                Vertex::Surface(normal, material)
-            };
-            rev_x.push(position);
-            rev_v.push(vertex);
-        }
-        let x1 = *rev_x.last().unwrap();
-        let (x0, light_normal) = match light {
-            LightKind::Area => (x1 + direction * (0.5 + rng.uniform()), facing_normal(-direction, rng)),
-            LightKind::Point => (x1 + direction * (0.5 + rng.uniform()), Vec3::Z),
-            LightKind::Directional | LightKind::Environment => (x1 + direction, Vec3::Z),
-        };
-        rev_x.push(x0);
-        rev_v.push(Vertex::Medium(usize::MAX));
-        rev_x.reverse();
-        rev_v.reverse();
-        camera.raster_position(rev_x[k - 1].max(Vec3::splat(-1e9)))?;
-        // The light's medium: vacuum for infinite lights (their rays come from outside the scene).
-        let light_medium = if light.is_finite() { random_medium(rng) } else { None };
-        let mut ends = vec![None; k + 1];
-        for (i, end) in ends.iter_mut().enumerate() {
-            *end = match i {
-                0 => light_medium,
-                i if i == k => camera_medium,
-                i => match rev_v[i] {
-                    Vertex::Medium(m) => Some(m),
-                    Vertex::Surface(..) => random_medium(rng),
-                },
-            };
-        }
-        let mut pieces = vec![Vec::new()];
-        for i in 1..=k {
-            let length = (rev_x[i] - rev_x[i - 1]).length();
-            let (start, end) = (ends[i - 1], ends[i]);
-            let n = 1 + (rng.uniform() * 3.0) as usize % 3;
-            let n = if n == 1 && start != end { 2 } else { n };
-            let mut cuts: Vec<f32> = (1..n).map(|_| 0.05 + 0.9 * rng.uniform()).collect();
-            cuts.sort_by(f32::total_cmp);
-            cuts.insert(0, 0.0);
-            cuts.push(1.0);
-            let segment: Vec<Piece> = (0..n)
-                .map(|p| Piece {
-                    length: (cuts[p + 1] - cuts[p]) * length,
-                    medium: if p == 0 {
-                        start
-                    } else if p == n - 1 {
-                        end
-                    } else {
-                        random_medium(rng)
-                    },
-                })
-                .collect();
-            pieces.push(segment);
-        }
-        Some(TestPath {
-            light,
-            x: rev_x,
-            vertex: rev_v,
-            light_normal,
-            pieces,
-            light_direction: direction,
-            camera,
-            light_area: 0.05 + 0.2 * rng.uniform(),
-        })
-    }
-
-    fn medium_at(&self, i: usize) -> Option<usize> {
-        match self.vertex[i] {
-            Vertex::Medium(m) if i >= 1 && i < self.k() => Some(m),
-            _ => None,
-        }
-    }
-
-    fn is_medium(&self, i: usize) -> bool {
-        self.medium_at(i).is_some()
-    }
-
-    fn is_specular(&self, i: usize) -> bool {
-        match self.vertex[i] {
-            Vertex::Surface(_, m) if i >= 1 && i < self.k() => m.diffuse.is_black() && m.phong.is_black(),
-            _ => false,
-        }
-    }
-
-    fn dir(&self, i: usize, j: usize) -> Vec3 {
-        if j == 0 && !self.light.is_finite() {
-            return self.light_direction;
-        }
-        if i == 0 && !self.light.is_finite() {
-            return -self.light_direction;
-        }
-        (self.x[j] - self.x[i]).normalize()
-    }
-
-    fn dist2(&self, i: usize, j: usize) -> f32 {
-        (self.x[j] - self.x[i]).length_squared()
-    }
-
-    /// |cos| at x_i towards x_j: 1 at medium vertices, point and infinite lights and the camera.
-    fn cos(&self, i: usize, j: usize) -> f32 {
-        if i == 0 {
-            return if self.light == LightKind::Area { self.light_normal.dot(self.dir(0, j)).abs() } else { 1.0 };
-        }
-        match self.vertex[i] {
-            Vertex::Surface(n, _) if i < self.k() => n.dot(self.dir(i, j)).abs(),
-            _ => 1.0,
-        }
-    }
-
-    /// At inner vertex i: solid-angle pdfs (forward, reverse) of scattering from `from` to
-    /// `to`, Russian roulette included.
-    fn scatter_pdfs(&self, i: usize, from: usize, to: usize) -> (f32, f32) {
-        let (normal, material) = match self.vertex[i] {
-            Vertex::Medium(m) => {
-                let m = &media()[m];
-                let p = m.phase.evaluate(self.dir(i, from), self.dir(i, to)) * m.continuation;
-                return (p, p);
-            }
-            Vertex::Surface(n, material) => (n, material),
-        };
-        let mode = if from > i { TransportMode::Radiance } else { TransportMode::Importance };
-        let bsdf = reference_bsdf(&material, normal, self.dir(i, from), mode).unwrap();
-        let cont = bsdf.continuation_probability();
-        if self.is_specular(i) {
-            let p = if material.ior < 0.0 {
-                1.0
-            } else {
-                let f = fresnel_dielectric(normal.dot(self.dir(i, from)), material.ior);
-                let reflected = normal.dot(self.dir(i, from)) * normal.dot(self.dir(i, to)) > 0.0;
-                if reflected { f } else { 1.0 - f }
-            };
-            return (p * cont, p * cont);
-        }
-        let eval = bsdf.evaluate(self.dir(i, to)).expect("the path was built with non-zero BSDFs");
-        (eval.pdf.forward.0 * cont, eval.pdf.reverse.0 * cont)
-    }
-
-    /// (p0_trace, p0_connect, emission pdf), pick probability included.
-    fn light_pdfs(&self) -> (f32, f32, f32) {
-        let disc = 1.0 / (PI * SCENE_RADIUS * SCENE_RADIUS);
-        match self.light {
-            LightKind::Area => {
-                let a = PICK / self.light_area;
-                (a, a, a * self.cos(0, 1) / PI)
-            }
-            LightKind::Point => (PICK, PICK, PICK / (4.0 * PI)),
-            LightKind::Directional => (PICK, PICK, PICK * disc),
-            LightKind::Environment => (PICK / (4.0 * PI), PICK / (4.0 * PI), PICK / (4.0 * PI) * disc),
-        }
-    }
-
-    fn camera_pdf_w(&self) -> f32 {
-        let k = self.k();
-        self.camera.solid_angle_pdf(self.camera.forward.dot(self.dir(k, k - 1))).0
-    }
-}
-
-fn random_medium(rng: &mut Rng) -> Option<usize> {
-    let u = (rng.uniform() * 4.0) as usize % 4;
-    (u < 3).then_some(u)
-}
 
 /// The oracle's free-flight factor of a walk along segment i (x_{i−1}–x_i) towards x_i when
 /// `towards_end`, else towards x_{i−1}: every piece passed (`P`) but the last, which is
@@ -340,6 +82,8 @@ enum Mutation {
     /// Every free flight that reaches a surface (passes a piece) does so with probability 1
     /// instead of `P(ℓ)`: a consistent mistake.
     PassIsCertain,
+    /// η_V/η_A = (4/3) r one per mille too large: a small consistent mistake.
+    VolumePerMilleLarge,
     /// Only the connection segments (`segment`: next event, connections, camera
     /// connections) pass with probability 1; the walks are right.
     PassIsCertainInConnections,
@@ -555,12 +299,13 @@ fn engine_weight(path: &TestPath, technique: Technique, kc: &MisConstants, mutat
                 light_forward_a: light_forward * path.cos(c, l) * reverse / d2,
                 light_reverse_w: light_reverse,
             };
-            mis::connection_weight_at(&light_states[l], &camera_states[c], &pdfs, kc, [eta(l), eta(c)])
+            let light = light_states[l].for_constants(kc); // light_vertex.rs `mis`: eqs. 62, 63
+            mis::connection_weight_at(&light, &camera_states[c], &pdfs, kc, [eta(l), eta(c)])
         }
         Technique::Vm(j) => {
             // merge.rs: the camera's phase function or BSDF for the light vertex's direction.
             let (camera_forward, camera_reverse) = path.scatter_pdfs(j, j + 1, j - 1);
-            let (light, camera) = (&light_states[j], &camera_states[j]);
+            let (light, camera) = (&light_states[j].for_constants(kc), &camera_states[j]);
             if path.is_medium(j) && !wrong_merge {
                 mis::merge_weight_in_medium(light, camera, camera_forward, camera_reverse, kc)
             } else {
@@ -594,7 +339,10 @@ struct Report {
 fn run(connect: bool, merge: bool, radius: f32, mutation: Mutation, oracle_area_in_medium: bool) -> Report {
     let mut rng = Rng::for_stream(2014, 15, 0);
     let counts = Counts { light: 4096, merge: 4096, radius };
-    let kc = MisConstants::new(4096, radius, connect, merge);
+    let mut kc = MisConstants::new(4096, radius, connect, merge);
+    if mutation == Mutation::VolumePerMilleLarge {
+        kc.volume_over_area *= 1.001;
+    }
     let lights = [LightKind::Area, LightKind::Point, LightKind::Directional, LightKind::Environment];
     let mut report = Report { mutation, ..Report::default() };
     for trial in 0..4000 {
@@ -678,6 +426,11 @@ fn the_oracle_sees_an_area_merge_at_medium_vertices() {
         eprintln!("{name}, {:?}: {r:?}", r.mutation);
         assert!(r.worst_error > 0.1 && r.worst_sum > 0.1, "{name}: the mutation went unseen: {r:?}");
     }
+    // A ball one per mille too large moves the weights by about 1e-3 (1 − w): ten times the
+    // tolerance.
+    let r = run(true, true, 0.3, Mutation::VolumePerMilleLarge, false);
+    eprintln!("vcm, {:?}: {r:?}", r.mutation);
+    assert!(r.worst_error > 5e-4, "a ball one per mille too large went unseen: {r:?}");
     // The oracle making that mistake disagrees with the engine.
     let r = run(true, true, 0.3, Mutation::None, true);
     assert!(r.worst_error > 0.1, "the oracle's area merge went unseen: {r:?}");
