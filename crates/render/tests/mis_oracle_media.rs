@@ -337,9 +337,23 @@ struct Report {
 /// Runs 4000 random paths for the technique families `connect`/`merge` (4096 light sub-paths,
 /// radius `radius`) and measures the engine against the oracle.
 fn run(connect: bool, merge: bool, radius: f32, mutation: Mutation, oracle_area_in_medium: bool) -> Report {
+    run_groups(connect, merge, radius, mutation, oracle_area_in_medium, 1)
+}
+
+/// [`run`] with the light sub-paths split into `groups` wavelength groups that merge only
+/// within their group (spectral mode with media: N_L/K merges per camera vertex, N_L
+/// light-tracing samples).
+fn run_groups(
+    connect: bool,
+    merge: bool,
+    radius: f32,
+    mutation: Mutation,
+    oracle_area_in_medium: bool,
+    groups: usize,
+) -> Report {
     let mut rng = Rng::for_stream(2014, 15, 0);
-    let counts = Counts { light: 4096, merge: 4096, radius };
-    let mut kc = MisConstants::new(4096, radius, connect, merge);
+    let counts = Counts { light: 4096, merge: 4096 / groups, radius };
+    let mut kc = MisConstants::with_merge_paths(4096.0, (4096 / groups) as f32, radius, connect, merge);
     if mutation == Mutation::VolumePerMilleLarge {
         kc.volume_over_area *= 1.001;
     }
@@ -411,6 +425,18 @@ fn bpt_weights_with_media_match_the_oracle() {
 #[test]
 fn bpm_weights_with_media_match_the_oracle() {
     check("bpm", false, true);
+}
+
+#[test]
+fn wavelength_groups_with_media_match_the_oracle() {
+    // Spectral mode groups scenes with media (`vcm/wavelengths.rs`): N_L/16 merges per camera
+    // vertex, in the disc and in the ball alike.
+    for (name, connect) in [("vcm", true), ("bpm", false)] {
+        let r = run_groups(connect, true, 0.3, Mutation::None, false, 16);
+        eprintln!("{name}, 16 groups: {r:?}");
+        assert!(r.worst_error < 1e-4 && r.worst_sum < 1e-4, "{name}, 16 groups: {r:?}");
+        assert!(r.medium_merges > 500, "{name}: too few merges at medium vertices: {r:?}");
+    }
 }
 
 #[test]
