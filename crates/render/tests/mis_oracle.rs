@@ -13,11 +13,14 @@
 // Loops run over vertex numbers x_i of the path notation, which index several arrays.
 #![allow(clippy::needless_range_loop)]
 
+#[path = "common/mis_surface.rs"]
+mod mis_surface;
+
 use math::{Frame, PI, Rng, Vec3};
+use mis_surface::{facing_normal, materials, random_unit, reference_bsdf};
 use render::vcm::mis::{self, ConnectionPdfs, MisConstants, NeePdfs, SubPathMis};
 use scene::material::fresnel_dielectric;
-use scene::{Bsdf, Camera, Material, ReferenceMaterial, ShadingPoint, TransportMode};
-use spectrum::Rgb;
+use scene::{Camera, ReferenceMaterial, TransportMode};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum LightKind {
@@ -53,34 +56,6 @@ struct TestPath {
 
 const PICK: f32 = 0.5;
 const SCENE_RADIUS: f32 = 3.0;
-
-fn materials() -> [ReferenceMaterial; 4] {
-    [
-        ReferenceMaterial::diffuse(Rgb::new(0.6, 0.5, 0.4)),
-        ReferenceMaterial {
-            diffuse: Rgb::splat(0.2),
-            phong: Rgb::splat(0.5),
-            phong_exponent: 8.0,
-            ..ReferenceMaterial::BLACK
-        },
-        ReferenceMaterial { mirror: Rgb::splat(0.9), ..ReferenceMaterial::BLACK },
-        ReferenceMaterial { mirror: Rgb::splat(1.0), ior: 1.5, ..ReferenceMaterial::BLACK },
-    ]
-}
-
-fn random_unit(rng: &mut Rng) -> Vec3 {
-    math::warp::uniform_sphere(rng.uniform2())
-}
-
-/// A unit normal whose cosine with `towards` is at least 0.3.
-fn facing_normal(towards: Vec3, rng: &mut Rng) -> Vec3 {
-    loop {
-        let n = (towards + 0.8 * random_unit(rng)).normalize();
-        if n.dot(towards) > 0.3 {
-            return n;
-        }
-    }
-}
 
 impl TestPath {
     fn k(&self) -> usize {
@@ -506,9 +481,4 @@ fn frames_are_orthonormal_for_the_generated_normals() {
         let f = Frame::from_z(n);
         assert!(f.x.dot(n).abs() < 1e-5);
     }
-}
-
-/// The BSDF of a reference material with the shading normal equal to the geometric one.
-fn reference_bsdf(material: &ReferenceMaterial, normal: Vec3, fixed: Vec3, mode: TransportMode) -> Option<Bsdf> {
-    Bsdf::new(&Material::from(*material), &ShadingPoint::flat(normal), fixed, mode)
 }

@@ -99,10 +99,14 @@ impl Flight {
         Flight { medium, unresolved: false, fallback: None, forward: 1.0, reverse: 1.0, first: true, from_medium, gap }
     }
 
-    /// Ends a piece with pass probability `pass` and density `density` at its end; `scattered`
-    /// when the segment ends there at a medium vertex.
+    /// Ends a piece with pass probability `pass` (unitless, [`pass_probability`] of the
+    /// piece's length; 1 in vacuum) and free-flight density `density` (per unit length,
+    /// [`flight_density`] at the piece's far end); `scattered` when the segment ends there at a
+    /// medium vertex. [`advance`] calls it for every piece it traces; it is public so that the
+    /// MIS oracle (`tests/mis_oracle_media.rs`) accumulates a segment's products exactly as
+    /// the walk does.
     #[inline]
-    fn end_piece(&mut self, pass: f32, density: f32, scattered: bool) {
+    pub fn end_piece(&mut self, pass: f32, density: f32, scattered: bool) {
         self.forward *= if scattered { density } else { pass };
         self.reverse *= if self.first && self.from_medium { density } else { pass };
         self.first = false;
