@@ -391,6 +391,9 @@ fn run_scenes() {
     for s in cornell::builtin_scenes() {
         println!("{:<4} {:<22} {:<6} {}", s.id, s.name, s.mask, s.description);
     }
+    for f in session::builtin_files::BUILTIN_FILES {
+        println!("{:<4} {:<22} {:<6} {}", "", f.name, "file", f.description);
+    }
     println!();
     println!("--scene-mask N builds other variants: ceiling light 1, sun 2, point 4, background 8,");
     println!("large mirror 16, large glass 32, small mirror 64, small glass 128, glossy floor 256,");

@@ -15,6 +15,7 @@
 //! asked (the Python module's `Session`).
 
 mod budget;
+pub mod builtin_files;
 pub mod checkpoint;
 pub mod fingerprint;
 pub mod guard;

@@ -19,17 +19,25 @@ pub enum SceneSource {
     File(PathBuf, Vec<String>),
 }
 
-/// Resolves a scene name as the command line gives it: a built-in id or name, or a scene file
-/// (a name with an extension or a `/`). `defines` are `NAME=VALUE` strings; they apply to scene
-/// files only.
+/// Resolves a scene name as the command line gives it: a built-in id or name, a built-in scene
+/// file ([`crate::builtin_files`], written to [`crate::builtin_files::cache_folder`] and then a
+/// file source), or a scene file (a name with an extension or a `/`). `defines` are
+/// `NAME=VALUE` strings; they apply to scene files only.
 pub fn scene_source(name: &str, defines: &[String]) -> Result<SceneSource> {
+    if let Some(file) = crate::builtin_files::find(name) {
+        let path = file.materialise(&crate::builtin_files::cache_folder())?;
+        return Ok(SceneSource::File(path, defines.to_vec()));
+    }
     if let Some(s) = cornell::builtin_scenes().find(|s| s.name == name || s.id.to_string() == name) {
         if let Some(define) = defines.first() {
             bail!("-D {define}: parameters apply to scene files, not to the built-in scene '{name}'");
         }
         return Ok(SceneSource::Builtin(s.mask));
     }
-    let valid: Vec<String> = cornell::builtin_scenes().map(|s| format!("{} ({})", s.id, s.name)).collect();
+    let valid: Vec<String> = cornell::builtin_scenes()
+        .map(|s| format!("{} ({})", s.id, s.name))
+        .chain(crate::builtin_files::BUILTIN_FILES.iter().map(|f| f.name.to_string()))
+        .collect();
     if Path::new(name).extension().is_some() || name.contains('/') {
         if !Path::new(name).exists() {
             bail!("scene file '{name}' does not exist (built-in scenes: {})", valid.join(", "));
