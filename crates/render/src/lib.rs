@@ -22,6 +22,7 @@ pub mod path_tracer;
 pub mod progressive;
 pub mod splat_frame;
 pub mod vcm;
+mod null_walk;
 pub mod volumetric;
 
 pub use driver::{Algorithm, RenderOutput, RenderSettings, render};

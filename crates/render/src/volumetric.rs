@@ -327,34 +327,19 @@ pub fn tracked_transmittance<S: SpectralMode>(
     rng: &mut Rng,
 ) -> Option<S> {
     let media: &Media = &scene.media;
-    let mut medium = medium;
     let mut carried = S::splat(1.0);
-    // Distances from `point`: of the last boundary crossed and of the current ray origin.
-    let (mut crossed, mut offset) = (0.0f32, RAY_EPSILON);
-    loop {
-        let remaining = distance - offset - RAY_EPSILON;
-        let ray = Ray::new(point + offset * direction, direction);
-        let hit = if remaining > 0.0 { scene.intersect(&ray).filter(|h| h.distance < remaining) } else { None };
-        // The medium piece up to the next boundary, or to the end of the segment.
-        let end = hit.as_ref().map_or(distance, |h| offset + h.distance);
-        if let Some(index) = medium {
+    let surfaces = crate::null_walk::walk::<S>(scene, point, direction, distance, medium, w, |piece| {
+        if let Some(index) = piece.medium {
             let m = media.medium(index);
+            let (start, end) = (piece.start, piece.end);
             if let Some(h) = m.heterogeneous() {
-                carried *= h.tracker::<S>(m.scale, w).transmittance(point, direction, crossed, end, rng, w);
+                carried *= h.tracker::<S>(m.scale, w).transmittance(point, direction, start, end, rng, w);
             } else {
-                carried *= transmittance(m.coefficients::<S>(w).sigma_t, end - crossed);
+                carried *= transmittance(m.coefficients::<S>(w).sigma_t, end - start);
             }
         }
-        let Some(hit) = hit else { break };
-        if !media.is_null(hit.material) {
-            carried *= null_factor::<S>(scene, &hit, direction, w)?;
-        }
-        if let Some(i) = media.interface(hit.primitive) {
-            medium = i.medium_towards(direction, hit.normal);
-        }
-        crossed = end;
-        offset = end + RAY_EPSILON;
-    }
+    })?;
+    carried *= surfaces;
     (!carried.is_black()).then_some(carried)
 }
 

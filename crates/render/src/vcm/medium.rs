@@ -261,40 +261,21 @@ pub fn segment<S: SpectralMode>(
     w: &S::Wavelengths,
 ) -> Option<Segment<S>> {
     let media = &scene.media;
-    let mut medium = medium;
     let mut carried = S::splat(1.0);
-    let (mut forward, mut reverse, mut first) = (1.0f32, 1.0f32, true);
-    let (mut crossed, mut offset) = (0.0f32, RAY_EPSILON);
-    loop {
-        let remaining = distance - offset - RAY_EPSILON;
-        let ray = Ray::new(point + offset * direction, direction);
-        let hit = if remaining > 0.0 { scene.intersect(&ray).filter(|h| h.distance < remaining) } else { None };
-        let end = hit.as_ref().map_or(distance, |h| offset + h.distance);
-        let last = hit.is_none();
-        if let Some(index) = medium {
+    let (mut forward, mut reverse) = (1.0f32, 1.0f32);
+    // The walk crosses null boundaries and thin dielectrics (`crosses_as_null`).
+    let surfaces = crate::null_walk::walk::<S>(scene, point, direction, distance, medium, w, |piece| {
+        if let Some(index) = piece.medium {
             let m: &Medium = media.medium(index);
             let rgb = m.coefficients::<Rgb>(&()).sigma_t;
-            let length = end - crossed;
+            let length = piece.end - piece.start;
             carried *= transmittance(m.coefficients::<S>(w).sigma_t, length);
             let (pass, density) = (pass_probability(rgb, length), flight_density(rgb, length));
-            forward *= if last && to_medium { density } else { pass };
-            reverse *= if first && from_medium { density } else { pass };
+            forward *= if piece.last && to_medium { density } else { pass };
+            reverse *= if piece.first && from_medium { density } else { pass };
         }
-        first = false;
-        let Some(hit) = hit else { break };
-        if !media.is_null(hit.material) {
-            // A thin dielectric passes the segment with its straight-through factor.
-            if !crosses_as_null(scene, &hit) {
-                return None;
-            }
-            carried *= crate::volumetric::null_factor::<S>(scene, &hit, direction, w)?;
-        }
-        if let Some(i) = media.interface(hit.primitive) {
-            medium = i.medium_towards(direction, hit.normal);
-        }
-        crossed = end;
-        offset = end + RAY_EPSILON;
-    }
+    })?;
+    carried *= surfaces;
     (!carried.is_black()).then_some(Segment { transmittance: carried, forward, reverse })
 }
 
