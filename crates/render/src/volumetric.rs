@@ -76,6 +76,10 @@ pub(crate) fn radiance<S: SpectralMode>(
     // was specular; distance from the last scattering vertex to the current ray origin.
     let mut last_pdf = 1.0f32;
     let mut last_specular = true;
+    // Position and normal (zero in a medium) of the last scattering vertex: the receiver of
+    // the light pick whose probability the MIS weight of an emitter hit needs.
+    let (mut last_position, mut last_normal) = (Vec3::ZERO, Vec3::ZERO);
+    let pick_probability = |index, p, n| tracer.light_sampler.probability(scene, p, n, index) * tracer.mis_pick_scale;
     let mut travelled = 0.0f32;
     // The medium between the last vertex and the ray origin (the offset of a ray leaving a
     // surface), counted in the next free flight.
@@ -110,7 +114,10 @@ pub(crate) fn radiance<S: SpectralMode>(
                 let continuation = if albedo_roulette { m.max_albedo() } else { 1.0 };
 
                 // Next-event estimation from the medium vertex.
-                if nee && let Some((light_index, light, pick)) = scene.pick_light(rng.uniform()) {
+                if nee
+                    && let Some((light_index, light, pick)) =
+                        tracer.light_sampler.pick(scene, position, Vec3::ZERO, rng.uniform())
+                {
                     let u = rng.uniform2();
                     if let Some(direct) = light.sample_direct(position, u, sphere) {
                         let phase = m.phase.evaluate(fixed, direct.direction);
@@ -147,6 +154,7 @@ pub(crate) fn radiance<S: SpectralMode>(
                 }
                 last_pdf = sample.pdf * continuation;
                 last_specular = false;
+                (last_position, last_normal) = (position, Vec3::ZERO);
                 ray = Ray::new(position, sample.direction);
                 travelled = 0.0;
                 gap = 0.0;
@@ -164,7 +172,8 @@ pub(crate) fn radiance<S: SpectralMode>(
                 let weight = if last_specular || !nee {
                     1.0
                 } else {
-                    heuristic.weight(last_pdf, emitted.direct_pdf.0 * scene.light_pick_probability(index))
+                    let pick = pick_probability(index, last_position, last_normal);
+                    heuristic.weight(last_pdf, emitted.direct_pdf.0 * pick)
                 };
                 result += throughput * scene.emission::<S>(index, w, emitted.radiance) * weight;
             }
@@ -180,7 +189,8 @@ pub(crate) fn radiance<S: SpectralMode>(
                     1.0
                 } else {
                     let direct_pdf = emitted.direct_pdf.to_solid_angle(distance * distance, emitted.cos_at_light);
-                    heuristic.weight(last_pdf, direct_pdf.0 * scene.light_pick_probability(light_index))
+                    let pick = pick_probability(light_index, last_position, last_normal);
+                    heuristic.weight(last_pdf, direct_pdf.0 * pick)
                 };
                 result += throughput * scene.emission::<S>(light_index, w, emitted.radiance) * weight;
             }
@@ -215,7 +225,8 @@ pub(crate) fn radiance<S: SpectralMode>(
         if nee
             && !at_limit
             && !bsdf.is_delta()
-            && let Some((index, light, pick)) = scene.pick_light(rng.uniform())
+            && let Some((index, light, pick)) =
+                tracer.light_sampler.pick(scene, hit.position, hit.shading_normal, rng.uniform())
         {
             let u = rng.uniform2();
             if let Some(direct) = light.sample_direct(hit.position, u, sphere)
@@ -269,6 +280,7 @@ pub(crate) fn radiance<S: SpectralMode>(
         }
         last_pdf = pdf;
         last_specular = sample.lobe.is_specular();
+        (last_position, last_normal) = (hit.position, hit.shading_normal);
         travelled = RAY_EPSILON;
         // A specular transmission straight through (a thin dielectric) is not a bounce, as in
         // Mitsuba 3, whose thin dielectric transmits with a null component.

@@ -168,7 +168,7 @@ mod tests {
 
     #[test]
     fn cone_union_contains_both_cones() {
-        let mut rng = math::Rng::new(3);
+        let mut rng = math::Rng::new(3, 0);
         for _ in 0..2000 {
             let a = math::warp::uniform_sphere(rng.uniform2());
             let b = math::warp::uniform_sphere(rng.uniform2());
