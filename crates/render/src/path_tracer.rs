@@ -84,7 +84,7 @@ impl LightSampler {
     /// Picks a light for a receiver at `p` with unit normal `n` (zero in a medium) from one
     /// uniform number: its index, the light and its discrete probability.
     #[inline]
-    pub(crate) fn pick<'a>(self, scene: &'a Scene, p: Vec3, n: Vec3, u: f32) -> Option<(u32, &'a Light, f32)> {
+    pub(crate) fn pick(self, scene: &Scene, p: Vec3, n: Vec3, u: f32) -> Option<(u32, &Light, f32)> {
         match self {
             LightSampler::Power => scene.pick_light(u),
             LightSampler::Tree => {

@@ -127,7 +127,7 @@ impl LightTree {
             let left = self.nodes[first].bounds.importance(p, n);
             let right = self.nodes[first + 1].bounds.importance(p, n);
             let total = left + right;
-            if !(total > 0.0) {
+            if total <= 0.0 {
                 return None;
             }
             let p_left = left / total;
@@ -161,7 +161,7 @@ impl LightTree {
             let sibling = if node == first { first + 1 } else { first };
             let own = self.nodes[node].bounds.importance(p, n);
             let total = own + self.nodes[sibling].bounds.importance(p, n);
-            if !(total > 0.0) {
+            if total <= 0.0 {
                 return 0.0;
             }
             pmf *= own / total;
@@ -185,7 +185,7 @@ fn split(items: &mut [(u32, LightBounds)], bounds: &Aabb) -> usize {
     };
     let mut best: Option<(f32, usize, usize)> = None;
     for axis in 0..3 {
-        if !(centroids.max[axis] > centroids.min[axis]) {
+        if centroids.max[axis] <= centroids.min[axis] {
             continue;
         }
         let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];
