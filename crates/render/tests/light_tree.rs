@@ -113,6 +113,9 @@ fn tree_and_power_selection_agree_and_a_wrong_mis_probability_is_detected() {
     let wrong_blocks = z_test_entries(&wm, &we, &pm, &pe, ALPHA / 2.0);
     let (wpm, wpe) = pooled(&wm, &we);
     let wrong_means = z_test_entries(&wpm, &wpe, &ppm, &ppe, ALPHA / 2.0);
-    eprintln!("wrong MIS probability: blocks worst z {:.2}, means worst z {:.2}", wrong_blocks.worst_z, wrong_means.worst_z);
+    eprintln!(
+        "wrong MIS probability: blocks worst z {:.2}, means worst z {:.2}",
+        wrong_blocks.worst_z, wrong_means.worst_z
+    );
     assert!(!wrong_blocks.passed || !wrong_means.passed, "a pick probability ×0.5 in the MIS weight passes");
 }
