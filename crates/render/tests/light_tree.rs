@@ -4,6 +4,8 @@
 //! one bounce, and MIS between next-event estimation and BSDF hits on the area emitters).
 //! Per 8 × 8 block and on the pooled means (Z-test, family-wise α = 1e-3); and a tree whose
 //! probability is wrong in the MIS weight of BSDF hits only (×0.5) must fail the same test.
+//! The same comparison with a scattering medium sphere on the floor exercises the volumetric
+//! path tracer (medium vertices pick lights with no normal).
 
 mod common;
 
@@ -20,7 +22,8 @@ const RESOLUTION: u32 = 32;
 const BLOCK: u32 = 8;
 const SPP: u64 = 512;
 
-fn scene() -> Scene {
+/// The lit floor and wall, with `extra` shapes added; written to `name`.xml.
+fn scene(name: &str, extra: &str) -> Scene {
     let xml = format!(
         r#"<scene version="3.0.0">
   <sensor type="perspective">
@@ -43,11 +46,12 @@ fn scene() -> Scene {
     <float name="beam_width" value="15"/>
     <transform name="to_world"><lookat origin="0.8, 2, 0.6" target="0.8, 0, 0.6" up="0, 0, 1"/></transform></emitter>
   <emitter type="point"><point name="position" x="-1" y="1.5" z="1"/><rgb name="intensity" value="0.8"/></emitter>
+  {extra}
 </scene>"#
     );
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("light_tree");
     std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("lights.xml");
+    let path = dir.join(format!("{name}.xml"));
     std::fs::write(&path, xml).unwrap();
     let desc = io::load_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
     Scene::from_description(&desc, None).unwrap_or_else(|e| panic!("{e}")).0
@@ -88,7 +92,7 @@ fn pooled(means: &[f64], errors: &[f64]) -> (Vec<f64>, Vec<f64>) {
 
 #[test]
 fn tree_and_power_selection_agree_and_a_wrong_mis_probability_is_detected() {
-    let scene = scene();
+    let scene = scene("lights", "");
     let (pm, pe) = blocks(&scene, tracer(LightSampler::Power, 1.0), 1);
     let (tm, te) = blocks(&scene, tracer(LightSampler::Tree, 1.0), 2);
     let per_block = z_test_entries(&tm, &te, &pm, &pe, ALPHA / 2.0);
@@ -117,5 +121,36 @@ fn tree_and_power_selection_agree_and_a_wrong_mis_probability_is_detected() {
         "wrong MIS probability: blocks worst z {:.2}, means worst z {:.2}",
         wrong_blocks.worst_z, wrong_means.worst_z
     );
+    assert!(!wrong_blocks.passed || !wrong_means.passed, "a pick probability ×0.5 in the MIS weight passes");
+}
+
+#[test]
+fn tree_and_power_selection_agree_through_a_medium() {
+    let medium = r#"<medium id="fog" type="homogeneous"><rgb name="sigma_t" value="3, 3, 3"/>
+    <rgb name="albedo" value="0.9, 0.8, 0.7"/><phase type="isotropic"/></medium>
+  <shape type="sphere"><point name="center" x="0.3" y="0.5" z="0.2"/><float name="radius" value="0.5"/>
+    <bsdf type="null"/><ref id="fog" name="interior"/></shape>"#;
+    let scene = scene("medium", medium);
+    assert!(scene.media.is_active(), "the volumetric walk renders this scene");
+    let (pm, pe) = blocks(&scene, tracer(LightSampler::Power, 1.0), 4);
+    let (tm, te) = blocks(&scene, tracer(LightSampler::Tree, 1.0), 5);
+    let per_block = z_test_entries(&tm, &te, &pm, &pe, ALPHA / 2.0);
+    let (tpm, tpe) = pooled(&tm, &te);
+    let (ppm, ppe) = pooled(&pm, &pe);
+    let means = z_test_entries(&tpm, &tpe, &ppm, &ppe, ALPHA / 2.0);
+    let detectable = detectable_bias(&tpm, &tpe, &ppm, &ppe, ALPHA / 2.0);
+    eprintln!(
+        "medium: tree {tpm:.4?} vs power {ppm:.4?}: blocks worst z {:.2}, means worst z {:.2}, detects {:.2} %",
+        per_block.worst_z,
+        means.worst_z,
+        100.0 * detectable
+    );
+    assert!(per_block.passed, "tree and power disagree on a block: {per_block}");
+    assert!(means.passed, "tree and power disagree on the means: {tpm:?} vs {ppm:?}");
+    assert!(detectable < 0.02, "the pooled test only detects a bias of {detectable}");
+    let (wm, we) = blocks(&scene, tracer(LightSampler::Tree, 0.5), 6);
+    let wrong_blocks = z_test_entries(&wm, &we, &pm, &pe, ALPHA / 2.0);
+    let (wpm, wpe) = pooled(&wm, &we);
+    let wrong_means = z_test_entries(&wpm, &wpe, &ppm, &ppe, ALPHA / 2.0);
     assert!(!wrong_blocks.passed || !wrong_means.passed, "a pick probability ×0.5 in the MIS weight passes");
 }
