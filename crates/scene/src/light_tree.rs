@@ -239,3 +239,12 @@ fn split(items: &mut [(u32, LightBounds)], bounds: &Aabb) -> usize {
     items.select_nth_unstable_by(mid, |a, b| a.1.bounds.center()[axis].total_cmp(&b.1.bounds.center()[axis]));
     mid
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn nodes_are_64_bytes() {
+        // docs/lights-suite.md states the tree's memory from this.
+        assert_eq!(std::mem::size_of::<super::Node>(), 64);
+    }
+}
