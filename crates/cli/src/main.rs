@@ -11,7 +11,7 @@ mod merge;
 mod mpi;
 mod report;
 
-use render::path_tracer::{Heuristic, RussianRoulette};
+use render::path_tracer::{Heuristic, LightSampler, RussianRoulette};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -173,6 +173,12 @@ struct RenderArgs {
     /// MIS heuristic of the path tracer (pt): balance or power (exponent 2).
     #[arg(long, default_value = "balance", value_name = "balance|power", value_parser = parse_heuristic)]
     heuristic: Heuristic,
+    /// How the path tracer (pt) picks a light for next-event estimation: `tree` conditions on
+    /// the shading point (a light BVH, pbrt-v4's), `power` is the scene-global selection (half
+    /// power, half uniform over emitters) that the VCM engine always uses. See
+    /// docs/lights-suite.md.
+    #[arg(long, default_value = "tree", value_name = "tree|power", value_parser = parse_light_sampler)]
+    light_sampler: LightSampler,
     /// How camera samples reach the pixels: `splat` spreads each over the pixels its
     /// reconstruction filter covers (Mitsuba's and pbrt's film), `fis` places it around its
     /// pixel's centre by importance-sampling the filter [default: splat for scene files, fis for
@@ -347,6 +353,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         permissive: args.permissive,
         russian_roulette: args.rr_depth,
         heuristic: args.heuristic,
+        light_sampler: args.light_sampler,
         film: args.film,
         summation: args.sums,
         slice: args.slice,
@@ -379,6 +386,11 @@ fn parse_summation(text: &str) -> Result<Summation, String> {
 /// Parses `--slice`.
 fn parse_slice(text: &str) -> Result<SliceSpec, String> {
     SliceSpec::parse(text).map_err(|e| format!("{e:#}"))
+}
+
+/// Parses `--light-sampler`.
+pub(crate) fn parse_light_sampler(text: &str) -> Result<LightSampler, String> {
+    LightSampler::from_name(text).ok_or_else(|| format!("expected 'tree' or 'power', got '{text}'"))
 }
 
 /// Parses `--heuristic`.

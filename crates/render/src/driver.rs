@@ -95,6 +95,8 @@ pub struct RenderSettings {
     pub russian_roulette: crate::path_tracer::RussianRoulette,
     /// MIS heuristic of the path tracer (`pt`).
     pub heuristic: crate::path_tracer::Heuristic,
+    /// How the path tracer (`pt`) picks lights for next-event estimation.
+    pub light_sampler: crate::path_tracer::LightSampler,
     /// Spectral mode with merging: wavelength groups per iteration
     /// ([`crate::vcm::VcmSettings::wavelength_groups`]).
     pub wavelength_groups: u32,
@@ -123,6 +125,7 @@ impl Default for RenderSettings {
             spectral: false,
             russian_roulette: crate::path_tracer::RussianRoulette::default(),
             heuristic: crate::path_tracer::Heuristic::Balance,
+            light_sampler: crate::path_tracer::LightSampler::default(),
             wavelength_groups: crate::vcm::wavelengths::DEFAULT_WAVELENGTH_GROUPS,
             variance: true,
             summation: Summation::Float,
@@ -235,6 +238,7 @@ impl<'a> Renderer<'a> {
                 spectral: settings.spectral,
                 russian_roulette: settings.russian_roulette,
                 heuristic: settings.heuristic,
+                light_sampler: settings.light_sampler,
                 ..PathTracer::new(settings.max_length)
             }),
         };

@@ -19,7 +19,7 @@
 //! emission is collected; the reference scenes' emitters are black and end the path.
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
-use scene::{Bsdf, Scene, TransportMode};
+use scene::{Bsdf, Light, Scene, TransportMode};
 use spectrum::{Hero4, Rgb, SpectralMode};
 
 use crate::fluorescent::{FluorescentVertex, scatter_slots, view};
@@ -41,6 +41,67 @@ pub struct PathTracer {
     pub russian_roulette: RussianRoulette,
     /// How next-event estimation and BSDF sampling are weighted.
     pub heuristic: Heuristic,
+    /// How next-event estimation picks a light.
+    pub light_sampler: LightSampler,
+    /// Factor on the light-pick probability in the MIS weight of emitters hit by BSDF sampling
+    /// only (not in next-event estimation's): 1 for a correct estimator. Any other value makes
+    /// the weights not sum to one (a bias); tests use that to show they detect a wrong pmf.
+    #[doc(hidden)]
+    pub mis_pick_scale: f32,
+}
+
+/// How the path tracer's next-event estimation picks a light. The VCM engine always uses the
+/// scene-global [`LightSampler::Power`] selection (its MIS needs a probability that does not
+/// depend on the receiving point).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSampler {
+    /// The scene-global selection ([`Scene::pick_light`]: half in proportion to power, half
+    /// uniform over emitters).
+    Power,
+    /// The light tree ([`scene::light_tree`]): conditioned on the receiving point and normal.
+    #[default]
+    Tree,
+}
+
+impl LightSampler {
+    /// The command line's spelling: `power` or `tree`.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSampler::Power => "power",
+            LightSampler::Tree => "tree",
+        }
+    }
+
+    /// Parses [`LightSampler::name`]'s spellings.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "power" => Some(LightSampler::Power),
+            "tree" => Some(LightSampler::Tree),
+            _ => None,
+        }
+    }
+
+    /// Picks a light for a receiver at `p` with unit normal `n` (zero in a medium) from one
+    /// uniform number: its index, the light and its discrete probability.
+    #[inline]
+    pub(crate) fn pick(self, scene: &Scene, p: Vec3, n: Vec3, u: f32) -> Option<(u32, &Light, f32)> {
+        match self {
+            LightSampler::Power => scene.pick_light(u),
+            LightSampler::Tree => {
+                scene.light_tree().sample(p, n, u).map(|(i, probability)| (i, &scene.lights[i as usize], probability))
+            }
+        }
+    }
+
+    /// Probability with which [`LightSampler::pick`] picks light `index` for the receiver
+    /// `(p, n)`.
+    #[inline]
+    pub(crate) fn probability(self, scene: &Scene, p: Vec3, n: Vec3, index: u32) -> f32 {
+        match self {
+            LightSampler::Power => scene.light_pick_probability(index),
+            LightSampler::Tree => scene.light_tree().probability(p, n, index),
+        }
+    }
 }
 
 /// When a path tracer's path is stopped at random (and its survivors scaled up).
@@ -132,6 +193,8 @@ impl PathTracer {
             spectral: false,
             russian_roulette: RussianRoulette::default(),
             heuristic: Heuristic::Balance,
+            light_sampler: LightSampler::default(),
+            mis_pick_scale: 1.0,
         }
     }
 
@@ -163,6 +226,7 @@ fn radiance<S: SpectralMode>(
     w: &S::Wavelengths,
 ) -> S {
     let (max_length, nee, heuristic) = (tracer.max_length, tracer.next_event_estimation, tracer.heuristic);
+    let sampler = tracer.light_sampler;
     let albedo_roulette = tracer.russian_roulette == RussianRoulette::Albedo;
     let sphere = &scene.bounding_sphere;
     let hero = S::hero_wavelength(w);
@@ -179,6 +243,9 @@ fn radiance<S: SpectralMode>(
     let mut last_specular = true;
     // Extra distance from the last vertex to the current ray origin.
     let mut origin_offset = 0.0f32;
+    // Position and shading normal of the last scattering vertex (the light pick's receiver).
+    let (mut last_position, mut last_normal) = (Vec3::ZERO, Vec3::ZERO);
+    let pick_probability = |index, p, n| sampler.probability(scene, p, n, index) * tracer.mis_pick_scale;
 
     loop {
         let Some(hit) = scene.intersect(&ray) else {
@@ -190,7 +257,8 @@ fn radiance<S: SpectralMode>(
                 let weight = if last_specular || !nee {
                     1.0
                 } else {
-                    heuristic.weight(last_pdf, emitted.direct_pdf.0 * scene.light_pick_probability(index))
+                    let pick = pick_probability(index, last_position, last_normal);
+                    heuristic.weight(last_pdf, emitted.direct_pdf.0 * pick)
                 };
                 result += throughput * view(&slots, scene.emission::<S>(index, w, emitted.radiance)) * weight;
             }
@@ -206,7 +274,8 @@ fn radiance<S: SpectralMode>(
                 } else {
                     let distance = hit.distance + origin_offset;
                     let direct_pdf = emitted.direct_pdf.to_solid_angle(distance * distance, emitted.cos_at_light);
-                    heuristic.weight(last_pdf, direct_pdf.0 * scene.light_pick_probability(light_index))
+                    let pick = pick_probability(light_index, last_position, last_normal);
+                    heuristic.weight(last_pdf, direct_pdf.0 * pick)
                 };
                 result += throughput * view(&slots, scene.emission::<S>(light_index, w, emitted.radiance)) * weight;
             }
@@ -227,7 +296,7 @@ fn radiance<S: SpectralMode>(
         // Next-event estimation (a path one segment longer).
         if nee
             && !bsdf.is_delta()
-            && let Some((index, light, pick)) = scene.pick_light(rng.uniform())
+            && let Some((index, light, pick)) = sampler.pick(scene, hit.position, hit.shading_normal, rng.uniform())
         {
             let u = rng.uniform2();
             if let Some(direct) = light.sample_direct(hit.position, u, sphere)
@@ -278,6 +347,7 @@ fn radiance<S: SpectralMode>(
         }
         last_pdf = pdf;
         last_specular = sample.lobe.is_specular();
+        (last_position, last_normal) = (hit.position, hit.shading_normal);
         ray = Ray::new(hit.position + RAY_EPSILON * sample.direction, sample.direction);
         origin_offset = RAY_EPSILON;
         path_length += 1;

@@ -74,6 +74,10 @@ pub(crate) fn radiance<S: SpectralMode>(
     // was specular; distance from the last scattering vertex to the current ray origin.
     let mut last_pdf = 1.0f32;
     let mut last_specular = true;
+    // Position and normal (zero in a medium) of the last scattering vertex: the receiver of
+    // the light pick whose probability the MIS weight of an emitter hit needs.
+    let (mut last_position, mut last_normal) = (Vec3::ZERO, Vec3::ZERO);
+    let pick_probability = |index, p, n| tracer.light_sampler.probability(scene, p, n, index) * tracer.mis_pick_scale;
     let mut travelled = 0.0f32;
     // The medium between the last vertex and the ray origin (the offset of a ray leaving a
     // surface), counted in the next free flight.
@@ -108,7 +112,10 @@ pub(crate) fn radiance<S: SpectralMode>(
                 let continuation = if albedo_roulette { m.max_albedo() } else { 1.0 };
 
                 // Next-event estimation from the medium vertex.
-                if nee && let Some((light_index, light, pick)) = scene.pick_light(rng.uniform()) {
+                if nee
+                    && let Some((light_index, light, pick)) =
+                        tracer.light_sampler.pick(scene, position, Vec3::ZERO, rng.uniform())
+                {
                     let u = rng.uniform2();
                     if let Some(direct) = light.sample_direct(position, u, sphere) {
                         let phase = m.phase.evaluate(fixed, direct.direction);
@@ -145,6 +152,7 @@ pub(crate) fn radiance<S: SpectralMode>(
                 }
                 last_pdf = sample.pdf * continuation;
                 last_specular = false;
+                (last_position, last_normal) = (position, Vec3::ZERO);
                 ray = Ray::new(position, sample.direction);
                 travelled = 0.0;
                 gap = 0.0;
@@ -162,7 +170,8 @@ pub(crate) fn radiance<S: SpectralMode>(
                 let weight = if last_specular || !nee {
                     1.0
                 } else {
-                    heuristic.weight(last_pdf, emitted.direct_pdf.0 * scene.light_pick_probability(index))
+                    let pick = pick_probability(index, last_position, last_normal);
+                    heuristic.weight(last_pdf, emitted.direct_pdf.0 * pick)
                 };
                 result += throughput * scene.emission::<S>(index, w, emitted.radiance) * weight;
             }
@@ -178,7 +187,8 @@ pub(crate) fn radiance<S: SpectralMode>(
                     1.0
                 } else {
                     let direct_pdf = emitted.direct_pdf.to_solid_angle(distance * distance, emitted.cos_at_light);
-                    heuristic.weight(last_pdf, direct_pdf.0 * scene.light_pick_probability(light_index))
+                    let pick = pick_probability(light_index, last_position, last_normal);
+                    heuristic.weight(last_pdf, direct_pdf.0 * pick)
                 };
                 result += throughput * scene.emission::<S>(light_index, w, emitted.radiance) * weight;
             }
@@ -214,7 +224,8 @@ pub(crate) fn radiance<S: SpectralMode>(
         if nee
             && !at_limit
             && !bsdf.is_delta()
-            && let Some((index, light, pick)) = scene.pick_light(rng.uniform())
+            && let Some((index, light, pick)) =
+                tracer.light_sampler.pick(scene, hit.position, hit.shading_normal, rng.uniform())
         {
             let u = rng.uniform2();
             if let Some(direct) = light.sample_direct(hit.position, u, sphere)
@@ -266,6 +277,7 @@ pub(crate) fn radiance<S: SpectralMode>(
         }
         last_pdf = pdf;
         last_specular = sample.lobe.is_specular();
+        (last_position, last_normal) = (hit.position, hit.shading_normal);
         travelled = RAY_EPSILON;
         path_length += 1;
     }

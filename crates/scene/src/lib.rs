@@ -14,6 +14,8 @@ pub mod filter;
 pub mod instance;
 pub mod light;
 pub mod light_selection;
+pub mod light_tree;
+pub mod light_tree_bounds;
 pub mod material;
 pub mod medium;
 pub mod microfacet;

@@ -15,6 +15,7 @@ use crate::desc::EmissionSpectrum;
 use crate::instance::{Instance, Object};
 use crate::light::{BoundingSphere, Light};
 use crate::light_selection::light_selection_weights;
+use crate::light_tree::LightTree;
 use crate::material::{Material, ShadingPoint, SurfaceTangents};
 use crate::medium::Media;
 use crate::shape::Shape;
@@ -140,6 +141,8 @@ pub struct Scene {
     /// Light selection ([`light_selection_weights`]; each light its own emitter unless
     /// [`Scene::with_light_groups`] said otherwise).
     light_selection: Option<Distribution1D>,
+    /// The light tree ([`Scene::light_tree`]), built on first use.
+    light_tree: std::sync::OnceLock<LightTree>,
     /// By material index: whether the material reads a mesh attribute.
     reads_mesh_attribute: Vec<bool>,
     /// Per material: [`Material::is_anisotropic`] (hits then carry ∂p/∂u).
@@ -206,6 +209,7 @@ impl Scene {
             media: Media::default(),
             light_spectra: Vec::new(),
             light_selection,
+            light_tree: std::sync::OnceLock::new(),
             reads_mesh_attribute,
             anisotropic,
             fibres,
@@ -238,6 +242,7 @@ impl Scene {
     /// ([`light_selection_weights`]). Fails when there is not one id per light.
     pub fn with_light_groups(mut self, groups: &[u32]) -> Result<Self, String> {
         self.light_selection = light_selection(&self.lights, &self.bounding_sphere, groups)?;
+        self.light_tree = std::sync::OnceLock::new();
         Ok(self)
     }
 
@@ -467,6 +472,14 @@ impl Scene {
             }
             None => S::from_emission(wavelengths, rgb),
         }
+    }
+
+    /// The light sampler that conditions on the receiving point ([`LightTree`]), built on the
+    /// first call from [`Scene::lights`] and [`Scene::light_pick_probability`] (changes to
+    /// the lights after that call are not seen).
+    pub fn light_tree(&self) -> &LightTree {
+        self.light_tree
+            .get_or_init(|| LightTree::build(&self.lights, &self.bounding_sphere, |i| self.light_pick_probability(i)))
     }
 
     /// Probability with which [`Scene::pick_light`] picks light `index`.

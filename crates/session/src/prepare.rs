@@ -196,6 +196,7 @@ impl Prepared {
             spectral: r.spectral,
             russian_roulette: r.russian_roulette,
             heuristic: r.heuristic,
+            light_sampler: r.light_sampler,
             // Checkpoints always carry the sums of squares, so that any resume can ask for a
             // variance image.
             variance: r.keep_variance || r.variance.is_some() || r.checkpoint.is_some(),

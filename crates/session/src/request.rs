@@ -1,6 +1,6 @@
 //! What a front end asks a session for.
 
-use render::path_tracer::{Heuristic, RussianRoulette};
+use render::path_tracer::{Heuristic, LightSampler, RussianRoulette};
 use scene::Summation;
 use scene::filter::FilmMode;
 use std::path::PathBuf;
@@ -78,6 +78,8 @@ pub struct Request {
     pub russian_roulette: RussianRoulette,
     /// MIS heuristic of the path tracer (`pt`).
     pub heuristic: Heuristic,
+    /// Light sampler of the path tracer's next-event estimation (`pt`).
+    pub light_sampler: LightSampler,
     /// How camera samples reach the pixels (`--film`). `None`: the scene's choice, splatting
     /// for scene files (which name a reconstruction filter), filter importance sampling for the
     /// built-in scenes. A resumed render keeps its checkpoint's mode (asking for another one is
@@ -124,6 +126,7 @@ impl Request {
             resume: None,
             russian_roulette: defaults.russian_roulette,
             heuristic: defaults.heuristic,
+            light_sampler: defaults.light_sampler,
             film: None,
             summation: None,
             slice: None,

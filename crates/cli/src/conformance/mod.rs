@@ -73,6 +73,9 @@ pub struct ConformanceArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub threads: usize,
+    /// Light sampler of the path tracer, as `vcm render --light-sampler`.
+    #[arg(long, default_value = "tree", value_name = "tree|power", value_parser = crate::parse_light_sampler)]
+    pub light_sampler: render::path_tracer::LightSampler,
     /// Film mode, as `vcm render --film` [default: splat, the scene files' default].
     #[arg(long, value_name = "splat|fis", value_parser = crate::parse_film)]
     pub film: Option<scene::filter::FilmMode>,
@@ -219,6 +222,7 @@ fn render_and_judge(
     request.permissive = args.permissive;
     request.keep_variance = true;
     request.film = args.film;
+    request.light_sampler = args.light_sampler;
     let rendered = catch(|| session::render(&request, None, &mut Quiet));
     let film = match rendered {
         Ok(outcome) => outcome.output.film,

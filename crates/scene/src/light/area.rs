@@ -5,7 +5,9 @@ use math::{Frame, PI, PdfA, PdfW, Vec3, warp};
 use spectrum::Rgb;
 
 use super::{DirectSample, EmissionSample, HitRadiance, check_point, check_rgb};
+use crate::light_tree_bounds::LightBounds;
 use crate::shape::Triangle;
+use math::Aabb;
 
 /// The surface of an area light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -168,5 +170,34 @@ impl AreaLight {
             emission_pdf: PdfW(self.inv_area * warp::cosine_hemisphere_pdf(cos_at_light)),
             cos_at_light,
         })
+    }
+}
+
+impl AreaLight {
+    /// Bounds for the light tree ([`LightBounds`]) from the light's [`super::Light::power`]
+    /// `power` (W): strength `power/π = L·A` (one-sided Lambertian emission), the normal as
+    /// the cone axis for triangles and discs, every direction for spheres, and emission into
+    /// the hemisphere (θ_e = π/2).
+    pub(super) fn bounds(&self, power: f32) -> LightBounds {
+        let phi = power / PI;
+        match self.shape {
+            AreaShape::Triangle(t) => {
+                LightBounds { bounds: t.bounds(), phi, axis: t.normal, cos_o: 1.0, cos_e: 0.0, two_sided: false }
+            }
+            AreaShape::Sphere { center, radius, .. } => {
+                LightBounds::omnidirectional(Aabb::new(center - Vec3::splat(radius), center + Vec3::splat(radius)), phi)
+            }
+            AreaShape::Disc { center, axis_u, axis_v, normal } => {
+                let extent = Vec3::new(axis_u.x.hypot(axis_v.x), axis_u.y.hypot(axis_v.y), axis_u.z.hypot(axis_v.z));
+                LightBounds {
+                    bounds: Aabb::new(center - extent, center + extent),
+                    phi,
+                    axis: normal,
+                    cos_o: 1.0,
+                    cos_e: 0.0,
+                    two_sided: false,
+                }
+            }
+        }
     }
 }

@@ -16,6 +16,7 @@ use spectrum::Rgb;
 
 use super::{DirectSample, EmissionSample, check_point, check_rgb, equal_area};
 use crate::desc::TextureImage;
+use crate::light_tree_bounds::LightBounds;
 
 /// A point light with an intensity image over the sphere of directions.
 #[derive(Clone, Debug, PartialEq)]
@@ -133,5 +134,13 @@ impl GoniometricLight {
             direct_pdf: PdfA(1.0),
             cos_at_light: 1.0,
         }
+    }
+}
+
+impl GoniometricLight {
+    /// Bounds for the light tree ([`LightBounds`]) from the light's power (W): strength
+    /// `power/4π` (the mean intensity), emission in every direction.
+    pub(super) fn bounds(&self, power: f32) -> LightBounds {
+        LightBounds::omnidirectional(math::Aabb::new(self.position, self.position), power / (4.0 * math::PI))
     }
 }

@@ -41,6 +41,7 @@ use math::{Frame, PI, PdfA, PdfW, Vec3, warp};
 use spectrum::Rgb;
 
 use crate::desc::LightDesc;
+use crate::light_tree_bounds::LightBounds;
 
 pub use area::{AreaLight, AreaShape};
 pub use background::BackgroundLight;
@@ -231,6 +232,26 @@ impl Light {
             Light::Background(light) => disc_area * 4.0 * PI * light.radiance.luminance(),
             Light::EnvMap(light) => disc_area * light.luminance_integral(),
         }
+    }
+
+    /// Bounds of a finite light for the light tree ([`crate::light_tree`]), with the strength
+    /// derived from [`Light::power`] (see each light's `bounds`); `None` for infinite lights
+    /// and for lights whose power is zero or not finite (never picked).
+    pub fn bounds(&self, sphere: &BoundingSphere) -> Option<LightBounds> {
+        let power = self.power(sphere);
+        if !(power.is_finite() && power > 0.0) {
+            return None;
+        }
+        let bounds = match self {
+            Light::Area(light) => light.bounds(power),
+            Light::TexturedTriangle(light) => light.bounds(power),
+            Light::Point(light) => light.bounds(power),
+            Light::Spot(light) => light.bounds(power),
+            Light::Projector(light) => light.bounds(power),
+            Light::Goniometric(light) => light.bounds(power),
+            Light::Directional(_) | Light::Background(_) | Light::EnvMap(_) => return None,
+        };
+        (bounds.phi.is_finite() && bounds.phi > 0.0).then_some(bounds)
     }
 
     /// Samples a point on the light as seen from `receiver` with two uniform numbers.

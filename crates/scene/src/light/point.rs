@@ -4,6 +4,7 @@ use math::{PdfA, PdfW, Vec3, warp};
 use spectrum::Rgb;
 
 use super::{DirectSample, EmissionSample};
+use crate::light_tree_bounds::LightBounds;
 
 /// An isotropic point light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,5 +41,13 @@ impl PointLight {
             direct_pdf: PdfA(1.0),
             cos_at_light: 1.0,
         }
+    }
+}
+
+impl PointLight {
+    /// Bounds for the light tree ([`LightBounds`]) from the light's power (W): strength
+    /// `power/4π` (the intensity), emission in every direction.
+    pub(super) fn bounds(&self, power: f32) -> LightBounds {
+        LightBounds::omnidirectional(math::Aabb::new(self.position, self.position), power / (4.0 * math::PI))
     }
 }

@@ -23,6 +23,7 @@ use spectrum::Rgb;
 
 use super::{DirectSample, EmissionSample, check_point, tabulated};
 use crate::desc::ProjectorModel;
+use crate::light_tree_bounds::LightBounds;
 use crate::texture::Texture;
 
 /// Largest tabulation grid of the sampling density (cells per axis).
@@ -200,5 +201,26 @@ impl ProjectorLight {
     /// unit world direction `direction` (0 outside the image).
     pub fn emission_pdf(&self, direction: Vec3) -> f32 {
         self.emitted(self.frame.to_local(direction)).map_or(0.0, |(_, pdf)| pdf)
+    }
+}
+
+impl ProjectorLight {
+    /// Bounds for the light tree ([`LightBounds`]) from the light's power (W): strength
+    /// `power / Ω` (the mean intensity over the image's solid angle
+    /// `Ω = 4·atan(t_x·t_y/√(1 + t_x² + t_y²))`), the optical axis with θ_o the half-angle of
+    /// the image's diagonal and θ_e = 1e-3 rad: zero importance only outside the image.
+    pub(super) fn bounds(&self, power: f32) -> LightBounds {
+        let (tx, ty) = (self.tan_half_fov, self.tan_half_fov / self.aspect);
+        let diagonal = (1.0 + tx * tx + ty * ty).sqrt();
+        let solid_angle = 4.0 * (tx * ty / diagonal).atan();
+        let phi = if solid_angle > 0.0 { power / solid_angle } else { 0.0 };
+        LightBounds {
+            bounds: math::Aabb::new(self.position, self.position),
+            phi,
+            axis: self.frame.z,
+            cos_o: 1.0 / diagonal,
+            cos_e: 1e-3f32.cos(),
+            two_sided: false,
+        }
     }
 }

@@ -9,6 +9,7 @@ use spectrum::Rgb;
 use crate::texture::Texture;
 
 use super::{DirectSample, EmissionSample, check_direction, check_point, check_rgb};
+use crate::light_tree_bounds::LightBounds;
 
 /// A spot light (Mitsuba's `spot`): a point emitting `intensity` within `beam_width` of its
 /// axis, falling off *linearly in angle* to zero at `cutoff` (Mitsuba 3's falloff curve):
@@ -205,6 +206,25 @@ impl SpotLight {
             emission_pdf: PdfW(self.cone_pdf()),
             direct_pdf: PdfA(1.0),
             cos_at_light: 1.0,
+        }
+    }
+}
+
+impl SpotLight {
+    /// Bounds for the light tree ([`LightBounds`]) from the light's power (W): strength
+    /// `power / ∫f dω` (the mean intensity over the falloff, the peak intensity without a
+    /// texture), the axis with θ_o = beam width and θ_e = cutoff − beam width (+1e-3 rad), so
+    /// that the importance is zero only beyond the cutoff, where the spot emits nothing.
+    pub(super) fn bounds(&self, power: f32) -> LightBounds {
+        let spread = self.falloff_solid_angle();
+        let phi = if spread > 0.0 { power / spread } else { 0.0 };
+        LightBounds {
+            bounds: math::Aabb::new(self.position, self.position),
+            phi,
+            axis: self.axis(),
+            cos_o: self.cos_beam_width,
+            cos_e: (self.cutoff - self.beam_width + 1e-3).min(PI).cos(),
+            two_sided: false,
         }
     }
 }

@@ -25,6 +25,7 @@ use spectrum::Rgb;
 
 use super::{DirectSample, EmissionSample, HitRadiance, tabulated};
 use crate::alpha::AlphaMask;
+use crate::light_tree_bounds::LightBounds;
 use crate::shape::Triangle;
 use crate::texture::Texture;
 
@@ -187,4 +188,20 @@ impl TexturedTriangleLight {
 /// Texture coordinates at barycentrics `b` (`b.x = b1`, `b.y = b2`).
 fn uv_at(uvs: &[Vec2; 3], b: Vec2) -> Vec2 {
     uvs[0] * (1.0 - b.x - b.y) + uvs[1] * b.x + uvs[2] * b.y
+}
+
+impl TexturedTriangleLight {
+    /// Bounds for the light tree ([`LightBounds`]) from the light's power (W): strength
+    /// `power/π` (the mean `L·A`), the triangle's normal as the cone axis, emission into its
+    /// hemisphere.
+    pub(super) fn bounds(&self, power: f32) -> LightBounds {
+        LightBounds {
+            bounds: self.triangle.bounds(),
+            phi: power / math::PI,
+            axis: self.triangle.normal,
+            cos_o: 1.0,
+            cos_e: 0.0,
+            two_sided: false,
+        }
+    }
 }
