@@ -18,11 +18,11 @@ pub mod driver;
 pub mod eye_light;
 pub mod fluorescent;
 pub mod hash_grid;
+mod null_walk;
 pub mod path_tracer;
 pub mod progressive;
 pub mod splat_frame;
 pub mod vcm;
-mod null_walk;
 pub mod volumetric;
 
 pub use driver::{Algorithm, RenderOutput, RenderSettings, render};
