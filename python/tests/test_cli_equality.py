@@ -14,6 +14,8 @@ CASES = [
     ("cornell-sun", "vcm", [], {}),
     ("cornell-area-mirror", "vcm", ["--spectral"], {"spectral": True}),
     ("scenes/cornell-fluorescent.xml", "bpt", ["--max-length", "5"], {"max_length": 5}),
+    ("cornell-area-mirror", "pt", ["--light-sampler", "power"], {"light_sampler": "power"}),
+    ("cornell-fog", "vcm", [], {}),
 ]
 
 

@@ -75,6 +75,7 @@ def render(
     memory_efficient: bool = False,
     rr_depth: str = "albedo",
     heuristic: str = "balance",
+    light_sampler: str = "tree",
     max_memory: Optional[int] = None,
     permissive: bool = False,
 ) -> Image:
@@ -101,6 +102,7 @@ class Session:
         memory_efficient: bool = False,
         rr_depth: str = "albedo",
         heuristic: str = "balance",
+        light_sampler: str = "tree",
         max_memory: Optional[int] = None,
         permissive: bool = False,
         techniques: bool = False,

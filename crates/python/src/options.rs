@@ -6,7 +6,7 @@ use std::time::Duration;
 use anyhow::{Result, anyhow, bail};
 use render::Algorithm;
 use render::driver::Budget;
-use render::path_tracer::{Heuristic, RussianRoulette};
+use render::path_tracer::{Heuristic, LightSampler, RussianRoulette};
 use session::{Request, SceneSource};
 
 /// The settings of a render, as the Python functions receive them.
@@ -25,6 +25,7 @@ pub struct Options {
     pub memory_efficient: bool,
     pub rr_depth: String,
     pub heuristic: String,
+    pub light_sampler: String,
     pub max_memory: Option<u64>,
     pub permissive: bool,
 }
@@ -66,6 +67,8 @@ impl Options {
             .ok_or_else(|| anyhow!("rr_depth: expected a bounce number >= 1 or 'albedo', got '{}'", self.rr_depth))?;
         request.heuristic = Heuristic::from_name(&self.heuristic)
             .ok_or_else(|| anyhow!("heuristic: expected 'balance' or 'power', got '{}'", self.heuristic))?;
+        request.light_sampler = LightSampler::from_name(&self.light_sampler)
+            .ok_or_else(|| anyhow!("light_sampler: expected 'tree' or 'power', got '{}'", self.light_sampler))?;
         request.max_memory = self.max_memory;
         request.permissive = self.permissive;
         // `Session.variance()` may be asked for at any time.

@@ -48,7 +48,8 @@ impl Notices {
 #[pyo3(signature = (scene, algorithm = "vcm".to_string(), iterations = None, time = None, resolution = None,
     seed = 0, threads = None, max_length = None, spectral = false, radius_factor = None, radius_alpha = None,
     radius_mode = "global".to_string(), memory_efficient = false, rr_depth = "albedo".to_string(),
-    heuristic = "balance".to_string(), max_memory = None, permissive = false))]
+    heuristic = "balance".to_string(), light_sampler = "tree".to_string(), max_memory = None,
+    permissive = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -67,6 +68,7 @@ pub fn render<'py>(
     memory_efficient: bool,
     rr_depth: String,
     heuristic: String,
+    light_sampler: String,
     max_memory: Option<u64>,
     permissive: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -85,6 +87,7 @@ pub fn render<'py>(
         memory_efficient,
         rr_depth,
         heuristic,
+        light_sampler,
         max_memory,
         permissive,
     };
@@ -133,7 +136,8 @@ impl Session {
     #[pyo3(signature = (scene, algorithm = "vcm".to_string(), resolution = None, seed = 0, threads = None,
         max_length = None, spectral = false, radius_factor = None, radius_alpha = None,
         radius_mode = "global".to_string(), memory_efficient = false, rr_depth = "albedo".to_string(),
-        heuristic = "balance".to_string(), max_memory = None, permissive = false, techniques = false,
+        heuristic = "balance".to_string(), light_sampler = "tree".to_string(), max_memory = None,
+        permissive = false, techniques = false,
         technique_length = 4))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -151,6 +155,7 @@ impl Session {
         memory_efficient: bool,
         rr_depth: String,
         heuristic: String,
+        light_sampler: String,
         max_memory: Option<u64>,
         permissive: bool,
         techniques: bool,
@@ -171,6 +176,7 @@ impl Session {
             memory_efficient,
             rr_depth,
             heuristic,
+            light_sampler,
             max_memory,
             permissive,
         };
