@@ -307,9 +307,10 @@ fn survives_throughput_roulette<S: SpectralMode>(
 
 /// The transmittance (per channel, unitless) of the segment from `point` along unit
 /// `direction` over `distance` (may be infinite), starting in `medium`: the product of the
-/// transmittances of its medium pieces, switching media at interfaces. `None` when a surface
-/// that is not an index-matched boundary blocks it (over the open interval `(ε, distance − ε)`
-/// of [`Scene::occluded`]) or nothing gets through. Homogeneous pieces give Beer–Lambert's
+/// transmittances of its medium pieces and of the straight-through factors of the thin
+/// dielectrics it crosses, switching media at interfaces (the walk of `crate::null_walk`).
+/// `None` when any other surface blocks it (over the open interval `(ε, distance − ε)` of
+/// [`Scene::occluded`]) or nothing gets through. Homogeneous pieces give Beer–Lambert's
 /// exact value; heterogeneous pieces a ratio-tracking estimate drawn from a generator seeded
 /// by the segment itself (deterministic per segment — the path tracer uses
 /// [`tracked_transmittance`] with its own generator instead).
