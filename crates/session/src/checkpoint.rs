@@ -17,7 +17,7 @@
 //! (fixed-point films) and, for a slice of a render ([`crate::slice`]), `slice=K/N` and
 //! `slice_iterations`; version 3 files are read as f64 films from iteration 0.
 
-use render::path_tracer::{Heuristic, RussianRoulette};
+use render::path_tracer::{Heuristic, LightSampler, RussianRoulette};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -57,6 +57,9 @@ pub struct Recorded {
     pub russian_roulette: RussianRoulette,
     /// MIS heuristic of the path tracer.
     pub heuristic: Heuristic,
+    /// Light sampler of the path tracer (absent in checkpoints written before it existed:
+    /// `power`, the only one then).
+    pub light_sampler: LightSampler,
     /// Film mode, `fis` or `splat` (absent in checkpoints written before it existed: `fis`).
     pub film: String,
     /// What the scene was built from.
@@ -145,6 +148,7 @@ pub fn header_lines(r: &Recorded) -> Vec<String> {
     lines.push(format!("spectral={}", r.spectral));
     lines.push(format!("russian_roulette={}", r.russian_roulette.name()));
     lines.push(format!("heuristic={}", r.heuristic.name()));
+    lines.push(format!("light_sampler={}", r.light_sampler.name()));
     lines.push(format!("film={}", r.film));
     lines.push(format!("sums={}", r.sums.name()));
     if let Some(slice) = &r.slice {
@@ -231,6 +235,10 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
             None => Heuristic::default(),
             Some(name) => Heuristic::from_name(name).ok_or_else(|| missing("heuristic"))?,
         },
+        light_sampler: match fields.get("light_sampler") {
+            None => LightSampler::Power,
+            Some(name) => LightSampler::from_name(name).ok_or_else(|| missing("light_sampler"))?,
+        },
         film: fields.get("film").map_or_else(|| "fis".to_string(), |f| f.to_string()),
         fingerprint: Fingerprint { hash: scene_hash, files },
         sums: match fields.get("sums") {
@@ -308,6 +316,7 @@ mod tests {
             spectral: true,
             russian_roulette: RussianRoulette::Albedo,
             heuristic: Heuristic::Power,
+            light_sampler: LightSampler::Power,
             film: "splat".into(),
             fingerprint: Fingerprint::builtin(450, (3, 2)),
             sums: Summation::Float,
@@ -347,7 +356,8 @@ mod tests {
         std::fs::write(&path, b"vcm-checkpoint 2\nmask=1\n\n").unwrap();
         let message = load(&path).unwrap_err().to_string();
         assert!(message.contains("has format 2") && message.contains("reads format 4"), "{message}");
-        // Format 3 (no sums, first iteration or slice lines) is read as an f64 film from 0.
+        // Format 3 (no sums, first iteration, slice or light-sampler lines) is read as an f64
+        // film from 0 rendered with the power light selection.
         recorded.scene_file = None;
         recorded.fingerprint = Fingerprint::builtin(450, (3, 2));
         save(&path, &recorded, &film).unwrap();
@@ -356,7 +366,9 @@ mod tests {
         let header = String::from_utf8_lossy(&text[..header_end])
             .replace("vcm-checkpoint 4", "vcm-checkpoint 3")
             .replace("\nsums=float", "")
-            .replace("\nfirst_iteration=0", "");
+            .replace("\nfirst_iteration=0", "")
+            // Written before the light sampler existed: power selection.
+            .replace("\nlight_sampler=power", "");
         std::fs::write(&path, [header.as_bytes(), &text[header_end..]].concat()).unwrap();
         let (back, film_back) = load(&path).unwrap();
         assert_eq!((back, film_back.sums().to_vec(), film_back.first_iteration()), (recorded, sums, 0));
@@ -383,6 +395,7 @@ mod tests {
             spectral: false,
             russian_roulette: RussianRoulette::Albedo,
             heuristic: Heuristic::Balance,
+            light_sampler: LightSampler::Tree,
             film: "fis".into(),
             fingerprint: Fingerprint::builtin(1, (2, 1)),
             sums: Summation::Fixed,

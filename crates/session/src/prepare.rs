@@ -71,6 +71,7 @@ impl Prepared {
                 request.spectral = recorded.spectral;
                 request.russian_roulette = recorded.russian_roulette;
                 request.heuristic = recorded.heuristic;
+                request.light_sampler = recorded.light_sampler;
                 let mode = FilmMode::from_name(&recorded.film)
                     .ok_or_else(|| anyhow::anyhow!("unknown film mode '{}' in '{}'", recorded.film, path.display()))?;
                 if let Some(asked) = request.film.filter(|asked| *asked != mode) {
@@ -248,6 +249,7 @@ impl Prepared {
             spectral: r.spectral,
             russian_roulette: r.russian_roulette,
             heuristic: r.heuristic,
+            light_sampler: r.light_sampler,
             film: scene.camera.film.name().to_string(),
             fingerprint,
             sums: settings.summation,
