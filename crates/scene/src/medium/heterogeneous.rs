@@ -183,6 +183,36 @@ impl<S: SpectralMode> Tracker<'_, S> {
         }
     }
 
+    /// The tentative collisions along `[t0, t1]`: a Poisson process at each stretch's majorant
+    /// (free flights `−ln(1 − u) / majorant` drawn from `rng`), visited in order as
+    /// `visit(t, majorant, rng)` until it returns false. Delta and ratio tracking differ only
+    /// in what they do at a collision.
+    fn collisions(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t0: f32,
+        t1: f32,
+        rng: &mut Rng,
+        mut visit: impl FnMut(f32, f32, &mut Rng) -> bool,
+    ) {
+        self.stretches(origin, direction, t0, t1, |start, end, majorant| {
+            if majorant <= 0.0 {
+                return true;
+            }
+            let mut t = start;
+            loop {
+                t -= (1.0 - rng.uniform()).ln() / majorant;
+                if t >= end {
+                    return true;
+                }
+                if !visit(t, majorant, rng) {
+                    return false;
+                }
+            }
+        });
+    }
+
     /// Delta tracking along the ray from `origin` along unit `direction` up to `t_max` (may be
     /// infinite) with the path's channel `channel` and density ratios `ratios` (updated);
     /// module documentation. The distance is from `origin`.
@@ -203,38 +233,29 @@ impl<S: SpectralMode> Tracker<'_, S> {
             return DistanceSample { distance: t_max, scattered: false, weight };
         };
         let mut outcome = None;
-        self.stretches(origin, direction, t0, t1, |start, end, majorant| {
-            if majorant <= 0.0 {
-                return true;
+        self.collisions(origin, direction, t0, t1, rng, |t, majorant, rng| {
+            let (sigma_t, sigma_s) = self.coefficients(origin + t * direction, w);
+            let sigma_t = sigma_t.map(|s| s.min(majorant));
+            let real = rng.uniform() * majorant < sigma_t.channel(channel);
+            let (g, d) = if real {
+                (sigma_s, sigma_t)
+            } else {
+                let sigma_n = sigma_t.map(|s| majorant - s);
+                (sigma_n, sigma_n)
+            };
+            let weighted = *ratios * d;
+            let mean = (0..S::CHANNELS).map(|c| weighted.channel(c)).sum::<f32>() / S::CHANNELS as f32;
+            if !(mean > 0.0 && mean.is_finite()) {
+                outcome = Some(DistanceSample { distance: t, scattered: real, weight: S::default() });
+                return false;
             }
-            let mut t = start;
-            loop {
-                t -= (1.0 - rng.uniform()).ln() / majorant;
-                if t >= end {
-                    return true;
-                }
-                let (sigma_t, sigma_s) = self.coefficients(origin + t * direction, w);
-                let sigma_t = sigma_t.map(|s| s.min(majorant));
-                let real = rng.uniform() * majorant < sigma_t.channel(channel);
-                let (g, d) = if real {
-                    (sigma_s, sigma_t)
-                } else {
-                    let sigma_n = sigma_t.map(|s| majorant - s);
-                    (sigma_n, sigma_n)
-                };
-                let weighted = *ratios * d;
-                let mean = (0..S::CHANNELS).map(|c| weighted.channel(c)).sum::<f32>() / S::CHANNELS as f32;
-                if !(mean > 0.0 && mean.is_finite()) {
-                    outcome = Some(DistanceSample { distance: t, scattered: real, weight: S::default() });
-                    return false;
-                }
-                *ratios = weighted * (1.0 / mean);
-                weight *= g * (1.0 / mean);
-                if real {
-                    outcome = Some(DistanceSample { distance: t, scattered: true, weight });
-                    return false;
-                }
+            *ratios = weighted * (1.0 / mean);
+            weight *= g * (1.0 / mean);
+            if real {
+                outcome = Some(DistanceSample { distance: t, scattered: true, weight });
+                return false;
             }
+            true
         });
         outcome.unwrap_or(DistanceSample { distance: t_max, scattered: false, weight })
     }
@@ -256,22 +277,10 @@ impl<S: SpectralMode> Tracker<'_, S> {
         if t0 >= t1 {
             return carried;
         }
-        self.stretches(origin, direction, t0, t1, |start, end, majorant| {
-            if majorant <= 0.0 {
-                return true;
-            }
-            let mut t = start;
-            loop {
-                t -= (1.0 - rng.uniform()).ln() / majorant;
-                if t >= end {
-                    return true;
-                }
-                let (sigma_t, _) = self.coefficients(origin + t * direction, w);
-                carried *= sigma_t.map(|s| 1.0 - s.min(majorant) / majorant);
-                if carried.is_black() {
-                    return false;
-                }
-            }
+        self.collisions(origin, direction, t0, t1, rng, |t, majorant, _| {
+            let (sigma_t, _) = self.coefficients(origin + t * direction, w);
+            carried *= sigma_t.map(|s| 1.0 - s.min(majorant) / majorant);
+            !carried.is_black()
         });
         carried
     }
