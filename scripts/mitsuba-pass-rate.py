@@ -9,7 +9,7 @@ by 32000, Šidák level over all pixel channels at α = 0.01) and prints the pas
 channel mean ratios, the relative standard error of the image mean (from the variance image),
 and per 32-column band the failing fraction. IMAGE/VARIANCE: e.g. `vcm render --variance` EXRs.
 
-`mitsuba SCENE N OUT` renders SCENE with Mitsuba's `path` integrator as N independent 1-spp
+`mitsuba SCENE N OUT [--integrator volpath]` renders SCENE with Mitsuba's `path` (or the given) integrator as N independent 1-spp
 iterations (seeds SEED·100000 + i) and writes OUT.exr (mean) and OUT_var.exr (variance of the
 mean from the spread of the iterations, as `vcm render --variance` estimates it).
 
@@ -63,7 +63,7 @@ def judge(args):
 
 
 def mitsuba(args):
-    scene = mi.load_file(args.scene, integrator="path", spp=1)
+    scene = mi.load_file(args.scene, integrator=args.integrator, spp=1)
     total = total_squares = 0.0
     for i in range(args.iterations):
         image = np.array(mi.render(scene, seed=args.seed * 100000 + i, spp=1)).astype(np.float64)[..., :3]
@@ -89,6 +89,7 @@ def main():
     m.add_argument("iterations", type=int)
     m.add_argument("out", help="output prefix")
     m.add_argument("--seed", type=int, default=1)
+    m.add_argument("--integrator", default="path", help="the scene's `integrator` parameter: volpath for media scenes")
     args = parser.parse_args()
     judge(args) if args.command == "judge" else mitsuba(args)
 

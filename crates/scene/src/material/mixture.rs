@@ -16,13 +16,16 @@ use super::dispatch::Model;
 use super::lobe::Sampled;
 use super::map_adapter::MapAdapter;
 use super::query::{BsdfEval, BsdfSample, PdfPair};
-use super::shading::{ShadingPoint, TransportMode, consistent};
+use super::shading::{ShadingPoint, TransportMode, consistent, sides_allowed};
 use crate::texture::TexturePoint;
 
 /// The BSDF of every material but [`Material::Reference`]: a weighted sum of leaf models
 /// (more than one only for blends), oriented by the shading normal.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct ModelBsdf {
+    /// Directions need not lie on the same side of the geometric and the shading tangent
+    /// planes (a smooth dielectric without a normal or bump map: [`sides_allowed`]).
+    relaxed: bool,
     /// Shading frame (z = shading normal, flipped to the side of the geometric normal).
     frame: Frame,
     /// Unit geometric normal (world).
@@ -121,7 +124,10 @@ impl ModelBsdf {
         let flat = shading == geometric;
         let frame = ShadingPoint::frame(shading, point.tangent);
         let local_fixed = frame.to_local(fixed);
-        if !consistent(cos_fixed_geometric, local_fixed.z) {
+        // A smooth dielectric or thin sheet follows its shading normal alone (`sides_allowed`).
+        let relaxed =
+            matches!(material, Material::Dielectric { .. } | Material::ThinDielectric { .. }) && adapter.is_none();
+        if !sides_allowed(relaxed, cos_fixed_geometric, local_fixed.z) {
             return None;
         }
         let empty = Component {
@@ -139,6 +145,7 @@ impl ModelBsdf {
             cos_fixed_geometric,
             mode,
             flat,
+            relaxed,
             tangent: point.tangent,
             adapter,
             flipped,
@@ -400,7 +407,7 @@ impl ModelBsdf {
                 let local = c.orient(direction);
                 let world = self.frame.to_world(local).normalize();
                 let cos_geometric = world.dot(self.geometric);
-                if !consistent(cos_geometric, local.z) || rho.is_black() {
+                if !sides_allowed(self.relaxed, cos_geometric, local.z) || rho.is_black() {
                     return None;
                 }
                 let mut value = rho * (c.scale * self.shading_factor(local.z, cos_geometric) / local.z.abs());
