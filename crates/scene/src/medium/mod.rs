@@ -34,7 +34,7 @@ use spectrum::tabulated::Tabulated;
 use spectrum::{Rgb, SpectralMode};
 
 pub use grid::{Filter, Grid, Outside, Volume};
-pub use heterogeneous::{Heterogeneous, Tracker};
+pub use heterogeneous::{Heterogeneous, MajorantProfile, Tracker};
 pub use homogeneous::{DistanceSample, sample_distance, transmittance};
 pub use phase::{PhaseFunction, PhaseSample};
 
