@@ -222,7 +222,14 @@ pub struct GridSurrogate {
 /// unit `direction` from `origin`, scene units; `end` may be infinite) in grid medium `h`
 /// (with the medium's `scale`), from the piecewise-constant RGB majorant `μ` of the majorant
 /// grid. Deterministic: the same for every technique and every wavelength set.
-pub fn grid_surrogate(h: &Heterogeneous, scale: f32, origin: Vec3, direction: Vec3, start: f32, end: f32) -> GridSurrogate {
+pub fn grid_surrogate(
+    h: &Heterogeneous,
+    scale: f32,
+    origin: Vec3,
+    direction: Vec3,
+    start: f32,
+    end: f32,
+) -> GridSurrogate {
     let profile = h.tracker::<Rgb>(scale, &()).majorant_profile(origin, direction, start, end);
     let pass = (-profile.depth).exp();
     GridSurrogate { pass, far: profile.at_end * pass, near: profile.at_start * pass }
