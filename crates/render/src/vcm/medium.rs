@@ -20,6 +20,35 @@
 //! whose RGB extinction is zero but whose spectrum is not is never sampled; no loader makes one.)
 //! In vacuum a piece is passed with probability 1.
 //!
+//! **Grid (heterogeneous) media: surrogate densities.** The true free-flight density of delta
+//! tracking in a grid cannot be evaluated, but the MIS weights do not need it: they only need
+//! *deterministic* functions that every technique evaluates identically for the same event,
+//! forward and reverse. The weights of a path then still sum to 1 over the techniques that can
+//! sample it, so the estimate stays unbiased; only its variance depends on how close the
+//! surrogates are to the true densities. They must be positive wherever a vertex with σ_s > 0
+//! can be sampled. A grid piece uses the piecewise-constant RGB **majorant** `μ(t)` along the
+//! ray (the majorant grid's cells, or the global majorant without a grid; 0 outside the
+//! medium's box): `P̂(ℓ) = exp(−∫_0^ℓ μ)` (unitless) and `D̂(t) = μ(t) exp(−∫_0^t μ)` (per
+//! unit length; the reverse flight's density at the piece's near end is `μ(0) P̂(ℓ)`),
+//! [`grid_surrogate`]. They are what [`Flight::end_piece_with`] and [`segment`] take for grid
+//! pieces; `∫_0^ℓ D̂ + P̂(ℓ) = 1`. The majorant is computed from the RGB coefficients, so it is
+//! the same for every wavelength set.
+//!
+//! **Grid media: weighted delta tracking** ([`advance`]; Kutz et al. 2017, "Spectral and
+//! decomposition tracking"): tentative collisions of the majorant `μ`; at a collision at `x` a
+//! real event with probability `q(x) = mean_c σ_t,c(x) / μ` over the RGB channels (the same
+//! for every wavelength set), else a null event. The throughput at wavelength (channel) `λ` is
+//! multiplied by `σ_s,λ(x) / (μ q)` at a real event and `(μ − σ_t,λ(x)) / (μ (1 − q))` at a
+//! null one, which is unbiased per `λ` (the null-collision integral equation with the
+//! sampling probabilities divided out); with `σ_t,λ ≤ μ` a convex combination of the channel
+//! values, both weights are at most 3. A real event only happens where `q > 0`, a null event
+//! where `q < 1`, so no weight divides by zero. Passing a grid piece multiplies by the product
+//! of its null weights. Connections estimate a grid piece's transmittance by ratio tracking
+//! ([`scene::medium::Tracker::transmittance`], the path tracer's), which draws random numbers
+//! from the caller's `Rng`: only when a grid piece is crossed, so other scenes draw the same
+//! numbers as before. A merge at a medium vertex divides by σ_s at the camera vertex's position
+//! ([`sigma_s_at`]).
+//!
 //! **Measures.** A surface vertex is reached with a density per unit *area*; a medium vertex
 //! with a density per unit *volume* (Veach 1997 §8.2 area–product measure extended to volumes,
 //! as in Georgiev's and Křivánek et al.'s path formulation). Converting a solid-angle density
@@ -143,8 +172,8 @@ pub enum Arrival {
 /// Traces `ray` to its next vertex: samples free flights in the media it crosses, passes
 /// index-matched boundaries (moving `ray` and adding the distance to `origin_offset`, the
 /// distance of the ray origin from the last vertex) and multiplies `throughput` by the
-/// free-flight weights. Draws no random numbers in vacuum, so surface-only scenes consume
-/// exactly the numbers they did before.
+/// free-flight weights (module doc; grid media by weighted delta tracking). Draws no random
+/// numbers in vacuum, so surface-only scenes consume exactly the numbers they did before.
 pub fn advance<S: SpectralMode>(
     scene: &Scene,
     ray: &mut Ray,
@@ -351,7 +380,8 @@ pub fn crosses_as_null(scene: &Scene, hit: &SurfaceHit) -> bool {
 /// `reverse` for sampling its start from its end (without cosines).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment<S> {
-    /// Beer–Lambert transmittance of the media along the segment, per channel.
+    /// Beer–Lambert transmittance of the media along the segment, per channel (an unbiased
+    /// ratio-tracking estimate through grid media).
     pub transmittance: S,
     /// `Π_{k<n} P_k · (D_n or P_n)`.
     pub forward: f32,
@@ -361,6 +391,8 @@ pub struct Segment<S> {
 
 /// The segment from `point` along unit `direction` over `distance` (may be infinite),
 /// starting in `medium`; `from_medium` / `to_medium` say whether its ends are medium vertices.
+/// Grid pieces take ratio tracking's transmittance estimate (random numbers from `rng`; none
+/// are drawn without a grid piece) and the surrogate densities ([`grid_surrogate`]).
 /// `None` when a surface that is neither an index-matched boundary nor crossed as null
 /// ([`crosses_as_null`], whose straight-through factor multiplies the transmittance) blocks
 /// it (over the open interval `(ε, distance − ε)`, as [`Scene::occluded`]) or nothing gets

@@ -242,7 +242,7 @@ impl Media {
         !self.media.is_empty() || self.null_materials.iter().any(|n| *n)
     }
 
-    /// Whether any medium is heterogeneous (only the path tracer renders those).
+    /// Whether any medium is heterogeneous.
     pub fn has_heterogeneous(&self) -> bool {
         self.media.iter().any(|m| m.heterogeneous().is_some())
     }
