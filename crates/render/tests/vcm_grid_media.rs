@@ -11,7 +11,10 @@
 //! frames), then the image means likewise, and the same data must be able to see a 4 % bias of
 //! the image mean (`common::detectable_bias`): the power check.
 //!
-//! The unit test checks the surrogate densities of a grid piece: `∫_0^ℓ D̂ + P̂(ℓ) = 1`.
+//! Two unit tests check the surrogate densities of a grid piece: `∫_0^ℓ D̂ + P̂(ℓ) = 1`, and the
+//! sub-path walk and the connection segments evaluate the same products (the MIS consistency;
+//! the per-block tests above are not sensitive enough to see every MIS inconsistency: `P̂`
+//! instead of `D̂` at a connection's medium end passes them, and fails this one).
 
 mod common;
 
@@ -230,5 +233,59 @@ fn surrogate_densities_integrate_to_one() {
         assert!(pass > 0.01 && pass < 0.9, "P̂ = {pass}: the piece should be neither empty nor opaque");
         assert!((integral + pass - 1.0).abs() < 1e-3, "∫D̂ + P̂ = {}", integral + pass);
         assert!((reverse + pass - 1.0).abs() < 1e-3, "reverse ∫D̂ + P̂ = {}", reverse + pass);
+    }
+}
+
+/// The sub-path walk (`advance`) and the connection segment (`segment`) evaluate the same
+/// surrogate products for the same segment — what the MIS weights need to sum to 1: from a
+/// medium vertex in the grid room, on 2000 random directions, the flight's forward and reverse
+/// products up to where `advance` stopped (a medium vertex or the wall) equal `segment`'s
+/// (relative 1e-5). Using `D̂` at the far end for the reverse flight, or `P̂` for a medium end
+/// in `segment`, fails it.
+#[test]
+fn sub_path_flights_and_segments_agree_on_the_surrogates() {
+    use math::{Ray, Rng};
+    use render::vcm::medium::{Arrival, Flight, advance, segment};
+    for chromatic in [false, true] {
+        let scene = grid_room(blob(chromatic), 8, false);
+        let (mut media_ends, mut surface_ends) = (0, 0);
+        for i in 0..2000u64 {
+            let mut rng = Rng::for_stream(3, 0, i);
+            let origin = Vec3::new(0.4 * rng.uniform() - 0.2, 0.4 * rng.uniform() - 0.2, 0.4 * rng.uniform() - 0.2);
+            let z = 2.0 * rng.uniform() - 1.0;
+            let phi = std::f32::consts::TAU * rng.uniform();
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let direction = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+            let mut ray = Ray::new(origin, direction);
+            let (mut offset, mut throughput) = (0.0f32, Rgb::splat(1.0));
+            let mut flight = Flight::start(Some(0), true, 0.0);
+            let arrival = advance::<Rgb>(&scene, &mut ray, &mut offset, &mut flight, &mut throughput, &mut rng, &());
+            let (distance, to_medium) = match arrival {
+                Arrival::Medium { distance, .. } => (distance, true),
+                Arrival::Surface(hit) => (hit.distance, false),
+                Arrival::Escaped => panic!("the room is closed"),
+            };
+            if to_medium {
+                media_ends += 1
+            } else {
+                surface_ends += 1
+            }
+            let mut other = Rng::for_stream(4, 0, i);
+            let Some(s) =
+                segment::<Rgb>(&scene, origin, direction, distance, Some(0), true, to_medium, &(), &mut other)
+            else {
+                continue;
+            };
+            for (what, walk, connection) in
+                [("forward", flight.forward, s.forward), ("reverse", flight.reverse, s.reverse)]
+            {
+                assert!(
+                    (walk - connection).abs() <= 1e-5 * walk.abs().max(connection.abs()),
+                    "{what}, chromatic {chromatic}, path {i} (medium end {to_medium}): walk {walk} vs segment {connection}"
+                );
+            }
+        }
+        eprintln!("chromatic {chromatic}: {media_ends} medium ends, {surface_ends} surface ends");
+        assert!(media_ends > 200 && surface_ends > 200, "both kinds of ends: {media_ends}, {surface_ends}");
     }
 }
