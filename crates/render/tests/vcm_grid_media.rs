@@ -289,3 +289,13 @@ fn sub_path_flights_and_segments_agree_on_the_surrogates() {
         assert!(media_ends > 200 && surface_ends > 200, "both kinds of ends: {media_ends}, {surface_ends}");
     }
 }
+
+/// bpm against pt (RGB, chromatic grid): merging (at medium vertices with the 3-D kernel and
+/// σ_s at the camera vertex, `vcm::medium::sigma_s_at`) is its only technique besides purely
+/// specular emitter hits; radius factor 0.02 as in `tests/vcm_media.rs`.
+#[test]
+fn bpm_matches_pt_in_a_chromatic_grid_room() {
+    let scene = grid_room(blob(true), 32, false);
+    let pt = estimate(&scene, "pt", false, 0.0, 1000, 5);
+    matches_pt("bpm", &estimate(&scene, "bpm", false, 0.02, 3000, 8), &pt);
+}
