@@ -299,3 +299,14 @@ fn bpm_matches_pt_in_a_chromatic_grid_room() {
     let pt = estimate(&scene, "pt", false, 0.0, 1000, 5);
     matches_pt("bpm", &estimate(&scene, "bpm", false, 0.02, 3000, 8), &pt);
 }
+
+/// ppm against pt (RGB, chromatic grid): camera paths merge at their first non-specular
+/// vertex, here mostly medium vertices (3-D kernel, σ_s at the camera vertex); radius factor
+/// 0.02 (r_0 ≈ 0.6), whose kernel bias stays below what the test sees in this smooth fog
+/// (measured, not bounded).
+#[test]
+fn ppm_matches_pt_in_a_chromatic_grid_room() {
+    let scene = grid_room(blob(true), 32, false);
+    let pt = estimate(&scene, "pt", false, 0.0, 1000, 5);
+    matches_pt("ppm", &estimate(&scene, "ppm", false, 0.02, 3000, 9), &pt);
+}
