@@ -320,9 +320,9 @@ impl<'a> Renderer<'a> {
 }
 
 /// The error for a scene with participating media or index-matched boundaries that
-/// `algorithm` cannot render: the path tracer and all six algorithms of the VCM engine render
-/// homogeneous media (`crate::vcm::medium`; the merging ones with volumetric photon points,
-/// `crate::vcm::mis`), the eye-light preview does not; no algorithm renders them together with
+/// `algorithm` cannot render: the path tracer and the algorithms of the VCM engine render
+/// homogeneous and grid media (`crate::vcm::medium`; the merging ones with volumetric photon
+/// points, `crate::vcm::mis`), the eye-light preview does not; no algorithm renders them together with
 /// fluorescent materials (issue #15).
 pub fn check_media(scene: &Scene, algorithm: Algorithm) -> Result<(), String> {
     if !scene.media.is_active() {
@@ -330,9 +330,6 @@ pub fn check_media(scene: &Scene, algorithm: Algorithm) -> Result<(), String> {
     }
     if !matches!(algorithm, Algorithm::PathTracing | Algorithm::Vcm(_)) {
         return Err("media are rendered by pt, lt, bpt, ppm, bpm and vcm only (issue #15)".to_string());
-    }
-    if algorithm != Algorithm::PathTracing && scene.media.has_heterogeneous() {
-        return Err("heterogeneous (grid) media are rendered by pt only so far (issue #15)".to_string());
     }
     if scene.has_fluorescence() {
         return Err("fluorescent materials in a scene with media are not supported yet (issue #15)".to_string());

@@ -522,8 +522,18 @@ fn connection_segments_through_a_null_boundary_match_the_oracle() {
     for (start, end, medium, from, to, pieces) in cases {
         let distance = (end - start).length();
         let direction = (end - start) / distance;
-        let got = segment::<Rgb>(&scene, start, direction, distance, medium.map(|m| m as u32), from, to, &())
-            .expect("nothing blocks the segment");
+        let got = segment::<Rgb>(
+            &scene,
+            start,
+            direction,
+            distance,
+            medium.map(|m| m as u32),
+            from,
+            to,
+            &(),
+            &mut math::Rng::new(1, 1),
+        )
+        .expect("nothing blocks the segment");
         let forward = oracle_pieces(&pieces, to);
         let reversed: Vec<Piece> = pieces.iter().rev().copied().collect();
         let reverse = oracle_pieces(&reversed, from);

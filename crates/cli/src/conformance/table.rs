@@ -180,8 +180,8 @@ impl Table {
              vcm conformance mitsuba-data/tests/scenes --markdown docs/conformance.md\n\
              ```\n\n\
              (`mitsuba-data/tests/common` must sit beside `mitsuba-data/tests/scenes`.) Grid \
-             (heterogeneous) media are rendered by `pt` only so far (issue #15); the other \
-             algorithms report that as an error."
+             (heterogeneous) media are rendered by `pt` and by the VCM engine's algorithms \
+             (`docs/media.md`)."
         );
         md
     }

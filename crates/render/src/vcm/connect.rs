@@ -69,9 +69,17 @@ pub fn connect_to_camera<S: SpectralMode>(
     let media = if scene.media.is_active() {
         let towards = end.side.towards(connection.direction);
         let d = connection.distance;
-        let Some(segment) =
-            segment::<S>(scene, position, connection.direction, d, towards, scatterer.is_medium(), false, wavelengths)
-        else {
+        let Some(segment) = segment::<S>(
+            scene,
+            position,
+            connection.direction,
+            d,
+            towards,
+            scatterer.is_medium(),
+            false,
+            wavelengths,
+            rng,
+        ) else {
             return;
         };
         Some(segment)
@@ -220,6 +228,7 @@ pub fn next_event<S: SpectralMode>(
             scatterer.is_medium(),
             false,
             wavelengths,
+            rng,
         ) else {
             return S::default();
         };
@@ -274,7 +283,8 @@ pub fn connect_vertices<S: SpectralMode>(
     let media = if scene.media.is_active() {
         let towards = end.side.towards(direction);
         let (from, to) = (scatterer.is_medium(), light_medium.is_some());
-        let Some(segment) = segment::<S>(scene, position, direction, distance, towards, from, to, wavelengths) else {
+        let Some(segment) = segment::<S>(scene, position, direction, distance, towards, from, to, wavelengths, rng)
+        else {
             return S::default();
         };
         Some(segment)

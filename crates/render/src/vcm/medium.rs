@@ -20,6 +20,35 @@
 //! whose RGB extinction is zero but whose spectrum is not is never sampled; no loader makes one.)
 //! In vacuum a piece is passed with probability 1.
 //!
+//! **Grid (heterogeneous) media: surrogate densities.** The true free-flight density of delta
+//! tracking in a grid cannot be evaluated, but the MIS weights do not need it: they only need
+//! *deterministic* functions that every technique evaluates identically for the same event,
+//! forward and reverse. The weights of a path then still sum to 1 over the techniques that can
+//! sample it, so the estimate stays unbiased; only its variance depends on how close the
+//! surrogates are to the true densities. They must be positive wherever a vertex with σ_s > 0
+//! can be sampled. A grid piece uses the piecewise-constant RGB **majorant** `μ(t)` along the
+//! ray (the majorant grid's cells, or the global majorant without a grid; 0 outside the
+//! medium's box): `P̂(ℓ) = exp(−∫_0^ℓ μ)` (unitless) and `D̂(t) = μ(t) exp(−∫_0^t μ)` (per
+//! unit length; the reverse flight's density at the piece's near end is `μ(0) P̂(ℓ)`),
+//! [`grid_surrogate`]. They are what [`Flight::end_piece_with`] and [`segment`] take for grid
+//! pieces; `∫_0^ℓ D̂ + P̂(ℓ) = 1`. The majorant is computed from the RGB coefficients, so it is
+//! the same for every wavelength set.
+//!
+//! **Grid media: weighted delta tracking** ([`advance`]; Kutz et al. 2017, "Spectral and
+//! decomposition tracking"): tentative collisions of the majorant `μ`; at a collision at `x` a
+//! real event with probability `q(x) = mean_c σ_t,c(x) / μ` over the RGB channels (the same
+//! for every wavelength set), else a null event. The throughput at wavelength (channel) `λ` is
+//! multiplied by `σ_s,λ(x) / (μ q)` at a real event and `(μ − σ_t,λ(x)) / (μ (1 − q))` at a
+//! null one, which is unbiased per `λ` (the null-collision integral equation with the
+//! sampling probabilities divided out); with `σ_t,λ ≤ μ` a convex combination of the channel
+//! values, both weights are at most 3. A real event only happens where `q > 0`, a null event
+//! where `q < 1`, so no weight divides by zero. Passing a grid piece multiplies by the product
+//! of its null weights. Connections estimate a grid piece's transmittance by ratio tracking
+//! ([`scene::medium::Tracker::transmittance`], the path tracer's), which draws random numbers
+//! from the caller's `Rng`: only when a grid piece is crossed, so other scenes draw the same
+//! numbers as before. A merge at a medium vertex divides by σ_s at the camera vertex's position
+//! ([`sigma_s_at`]).
+//!
 //! **Measures.** A surface vertex is reached with a density per unit *area*; a medium vertex
 //! with a density per unit *volume* (Veach 1997 §8.2 area–product measure extended to volumes,
 //! as in Georgiev's and Křivánek et al.'s path formulation). Converting a solid-angle density
@@ -47,7 +76,7 @@
 //! around a medium sphere holding the camera: +1.7 % on the camera-inside furnace.)
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
-use scene::medium::{Medium, MediumInterface, transmittance};
+use scene::medium::{Heterogeneous, Medium, MediumInterface, transmittance};
 use scene::{Bsdf, Scene, SurfaceHit};
 use spectrum::{Rgb, SpectralMode};
 
@@ -107,8 +136,17 @@ impl Flight {
     /// the walk does.
     #[inline]
     pub fn end_piece(&mut self, pass: f32, density: f32, scattered: bool) {
-        self.forward *= if scattered { density } else { pass };
-        self.reverse *= if self.first && self.from_medium { density } else { pass };
+        self.end_piece_with(pass, density, density, scattered);
+    }
+
+    /// [`Flight::end_piece`] with different densities (per unit length) at the two ends of the
+    /// piece: `far` for a flight along the ray stopping at the far end, `near` for the reverse
+    /// flight stopping at the near end (equal in a homogeneous medium; a grid piece's
+    /// surrogate densities differ, see [`grid_surrogate`]).
+    #[inline]
+    pub fn end_piece_with(&mut self, pass: f32, far: f32, near: f32, scattered: bool) {
+        self.forward *= if scattered { far } else { pass };
+        self.reverse *= if self.first && self.from_medium { near } else { pass };
         self.first = false;
     }
 }
@@ -134,8 +172,8 @@ pub enum Arrival {
 /// Traces `ray` to its next vertex: samples free flights in the media it crosses, passes
 /// index-matched boundaries (moving `ray` and adding the distance to `origin_offset`, the
 /// distance of the ray origin from the last vertex) and multiplies `throughput` by the
-/// free-flight weights. Draws no random numbers in vacuum, so surface-only scenes consume
-/// exactly the numbers they did before.
+/// free-flight weights (module doc; grid media by weighted delta tracking). Draws no random
+/// numbers in vacuum, so surface-only scenes consume exactly the numbers they did before.
 pub fn advance<S: SpectralMode>(
     scene: &Scene,
     ray: &mut Ray,
@@ -154,7 +192,19 @@ pub fn advance<S: SpectralMode>(
         }
         let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.distance);
         let length = t_max + flight.gap;
-        if let Some(index) = flight.medium {
+        if let Some(index) = flight.medium
+            && let Some(h) = media.medium(index).heterogeneous()
+        {
+            let m = media.medium(index);
+            match advance_grid(m, h, ray, length, flight, throughput, rng, w) {
+                GridOutcome::Scattered(t) => {
+                    let distance = (t - flight.gap).max(0.0);
+                    return Arrival::Medium { position: ray.at(distance), distance, medium: index };
+                }
+                GridOutcome::Passed => {}
+                GridOutcome::Absorbed => return Arrival::Escaped,
+            }
+        } else if let Some(index) = flight.medium {
             let m = media.medium(index);
             let rgb = m.coefficients::<Rgb>(&()).sigma_t;
             let channel = ((rng.uniform() * 3.0) as usize).min(2);
@@ -181,6 +231,101 @@ pub fn advance<S: SpectralMode>(
             return Arrival::Surface(hit);
         }
         pass_boundary(scene, &hit, ray, origin_offset, flight);
+    }
+}
+
+/// The surrogate free-flight quantities of a grid piece (module doc): `P̂` and `D̂` at both ends.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridSurrogate {
+    /// `P̂(ℓ) = exp(−∫_0^ℓ μ)`: the surrogate probability of passing the piece (unitless).
+    pub pass: f32,
+    /// `μ(ℓ) P̂(ℓ)`: the surrogate density (per unit length) of a flight along the ray
+    /// stopping at the piece's far end.
+    pub far: f32,
+    /// `μ(0) P̂(ℓ)`: the surrogate density (per unit length) of the reverse flight stopping
+    /// at the piece's near end.
+    pub near: f32,
+}
+
+/// The surrogate densities ([`GridSurrogate`]) of the piece `[start, end]` (distances along the
+/// unit `direction` from `origin`, scene units; `end` may be infinite) in grid medium `h`
+/// (with the medium's `scale`), from the piecewise-constant RGB majorant `μ` of the majorant
+/// grid. Deterministic: the same for every technique and every wavelength set.
+pub fn grid_surrogate(
+    h: &Heterogeneous,
+    scale: f32,
+    origin: Vec3,
+    direction: Vec3,
+    start: f32,
+    end: f32,
+) -> GridSurrogate {
+    let profile = h.tracker::<Rgb>(scale, &()).majorant_profile(origin, direction, start, end);
+    let pass = (-profile.depth).exp();
+    GridSurrogate { pass, far: profile.at_end * pass, near: profile.at_start * pass }
+}
+
+/// How a sub-path's flight through a grid piece ended.
+enum GridOutcome {
+    /// A real scattering event at this distance from the piece's start.
+    Scattered(f32),
+    /// The piece was passed.
+    Passed,
+    /// The throughput became zero (spectral null weights).
+    Absorbed,
+}
+
+/// Weighted delta tracking through a grid piece of `length` (module doc): tentative collisions
+/// of the RGB majorant `μ` from the piece's start (`flight.gap` before `ray`'s origin); at a
+/// collision at `x` a real event with probability `q(x) = mean_c σ_t,c(x) / μ` over the RGB
+/// channels, weight `σ_s,λ(x) / (μ q)`, else a null event, weight `(μ − σ_t,λ(x)) / (μ (1 − q))`.
+/// Ends the flight's piece with the surrogate densities.
+#[allow(clippy::too_many_arguments)]
+fn advance_grid<S: SpectralMode>(
+    m: &Medium,
+    h: &Heterogeneous,
+    ray: &Ray,
+    length: f32,
+    flight: &mut Flight,
+    throughput: &mut S,
+    rng: &mut Rng,
+    w: &S::Wavelengths,
+) -> GridOutcome {
+    let start = ray.origin - flight.gap * ray.direction;
+    let direction = ray.direction;
+    let rgb = h.tracker::<Rgb>(m.scale, &());
+    let spectral = h.tracker::<S>(m.scale, w);
+    let mut weight = S::splat(1.0);
+    let mut real = None;
+    rgb.tentative_collisions(start, direction, 0.0, length, rng, |t, mu, rng| {
+        let x = start + t * direction;
+        let (rgb_t, _) = rgb.coefficients(x, &());
+        let q = ((rgb_t.r.min(mu) + rgb_t.g.min(mu) + rgb_t.b.min(mu)) / (3.0 * mu)).clamp(0.0, 1.0);
+        let (sigma_t, sigma_s) = spectral.coefficients(x, w);
+        if rng.uniform() < q {
+            weight *= sigma_s * (1.0 / (mu * q));
+            real = Some(t);
+            return false;
+        }
+        weight *= sigma_t.map(|s| mu - s) * (1.0 / (mu * (1.0 - q)));
+        !weight.is_black()
+    });
+    *throughput *= weight;
+    let end = real.unwrap_or(length);
+    let surrogate = grid_surrogate(h, m.scale, start, direction, 0.0, end);
+    flight.end_piece_with(surrogate.pass, surrogate.far, surrogate.near, real.is_some());
+    match real {
+        Some(t) => GridOutcome::Scattered(t),
+        None if weight.is_black() => GridOutcome::Absorbed,
+        None => GridOutcome::Passed,
+    }
+}
+
+/// σ_s (per scene unit) of medium `m` at `position` at the wavelengths `w`: the medium's
+/// constant σ_s, or a grid medium's at the point.
+pub fn sigma_s_at<S: SpectralMode>(m: &Medium, position: Vec3, w: &S::Wavelengths) -> S {
+    match m.heterogeneous() {
+        Some(h) => h.tracker::<S>(m.scale, w).coefficients(position, w).1,
+        None => m.coefficients::<S>(w).sigma_s,
     }
 }
 
@@ -235,7 +380,8 @@ pub fn crosses_as_null(scene: &Scene, hit: &SurfaceHit) -> bool {
 /// `reverse` for sampling its start from its end (without cosines).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment<S> {
-    /// Beer–Lambert transmittance of the media along the segment, per channel.
+    /// Beer–Lambert transmittance of the media along the segment, per channel (an unbiased
+    /// ratio-tracking estimate through grid media).
     pub transmittance: S,
     /// `Π_{k<n} P_k · (D_n or P_n)`.
     pub forward: f32,
@@ -245,6 +391,8 @@ pub struct Segment<S> {
 
 /// The segment from `point` along unit `direction` over `distance` (may be infinite),
 /// starting in `medium`; `from_medium` / `to_medium` say whether its ends are medium vertices.
+/// Grid pieces take ratio tracking's transmittance estimate (random numbers from `rng`; none
+/// are drawn without a grid piece) and the surrogate densities ([`grid_surrogate`]).
 /// `None` when a surface that is neither an index-matched boundary nor crossed as null
 /// ([`crosses_as_null`], whose straight-through factor multiplies the transmittance) blocks
 /// it (over the open interval `(ε, distance − ε)`, as [`Scene::occluded`]) or nothing gets
@@ -259,6 +407,7 @@ pub fn segment<S: SpectralMode>(
     from_medium: bool,
     to_medium: bool,
     w: &S::Wavelengths,
+    rng: &mut Rng,
 ) -> Option<Segment<S>> {
     let media = &scene.media;
     let mut carried = S::splat(1.0);
@@ -267,6 +416,14 @@ pub fn segment<S: SpectralMode>(
     let surfaces = crate::null_walk::walk::<S>(scene, point, direction, distance, medium, w, |piece| {
         if let Some(index) = piece.medium {
             let m: &Medium = media.medium(index);
+            if let Some(h) = m.heterogeneous() {
+                let tracker = h.tracker::<S>(m.scale, w);
+                carried *= tracker.transmittance(point, direction, piece.start, piece.end, rng, w);
+                let g = grid_surrogate(h, m.scale, point, direction, piece.start, piece.end);
+                forward *= if piece.last && to_medium { g.far } else { g.pass };
+                reverse *= if piece.first && from_medium { g.near } else { g.pass };
+                return;
+            }
             let rgb = m.coefficients::<Rgb>(&()).sigma_t;
             let length = piece.end - piece.start;
             carried *= transmittance(m.coefficients::<S>(w).sigma_t, length);

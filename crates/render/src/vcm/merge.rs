@@ -170,7 +170,7 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
         // 1/σ_s(x), Jensen and Christensen 1998).
         let scattered = match scatterer {
             Scatterer::Medium(m, _) => {
-                scattered * m.coefficients::<S>(w).sigma_s.map(|s| if s > 0.0 { 1.0 / s } else { 0.0 })
+                scattered * super::medium::sigma_s_at::<S>(m, position, w).map(|s| if s > 0.0 { 1.0 / s } else { 0.0 })
             }
             Scatterer::Surface(_) => scattered,
         };

@@ -73,6 +73,17 @@ pub struct Tracker<'a, S: SpectralMode> {
     basis: [S; 3],
 }
 
+/// The majorant along a ray interval ([`Tracker::majorant_profile`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MajorantProfile {
+    /// `∫ μ` over the interval (unitless optical depth).
+    pub depth: f32,
+    /// `μ` at the interval's start (per scene unit; 0 outside the region).
+    pub at_start: f32,
+    /// `μ` at the interval's end (per scene unit; 0 outside the region).
+    pub at_end: f32,
+}
+
 impl Heterogeneous {
     /// A medium with σ_t `sigma_t`, albedo `albedo` (or scattering `sigma_s`) filling the box
     /// whose unit cube is `region` of world space; builds the majorant grid of a gridded σ_t.
@@ -211,6 +222,58 @@ impl<S: SpectralMode> Tracker<'_, S> {
                 }
             }
         });
+    }
+
+    /// The piecewise-constant majorant `μ` (per scene unit) along the ray from `origin` along
+    /// unit `direction` over `[t_start, t_end]` (`t_end` may be infinite): the stretches of the
+    /// majorant grid, or the global majorant without one, and 0 outside the region. Returns
+    /// its integral `∫ μ` over the interval (unitless optical depth) and `μ` at the two ends.
+    /// Deterministic: it draws no random numbers (the VCM engine's surrogate free-flight
+    /// densities are built from it).
+    pub fn majorant_profile(&self, origin: Vec3, direction: Vec3, t_start: f32, t_end: f32) -> MajorantProfile {
+        let mut profile = MajorantProfile { depth: 0.0, at_start: 0.0, at_end: 0.0 };
+        let Some((t0, t1)) = self.clip(origin, direction, t_end) else { return profile };
+        let t0 = t0.max(t_start);
+        if t0 >= t1 {
+            return profile;
+        }
+        let (mut first, mut last) = (None, 0.0f32);
+        self.stretches(origin, direction, t0, t1, |s0, s1, majorant| {
+            if s1 > s0 {
+                profile.depth += (s1 - s0) * majorant;
+                first.get_or_insert(majorant);
+                last = majorant;
+            }
+            true
+        });
+        if t0 <= t_start {
+            profile.at_start = first.unwrap_or(0.0);
+        }
+        if t1 >= t_end {
+            profile.at_end = last;
+        }
+        profile
+    }
+
+    /// The tentative collisions of the piecewise-constant majorant (see
+    /// [`Tracker::majorant_profile`]) along the ray from `origin` along unit `direction` over
+    /// `[t_start, t_end]`, in order: `visit(t, μ, rng)` with the distance `t` from `origin` and
+    /// the local majorant `μ` (per scene unit), until it returns false. Free flights
+    /// `−ln(1 − u) / μ` are drawn from `rng`.
+    pub fn tentative_collisions(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_start: f32,
+        t_end: f32,
+        rng: &mut Rng,
+        visit: impl FnMut(f32, f32, &mut Rng) -> bool,
+    ) {
+        let Some((t0, t1)) = self.clip(origin, direction, t_end) else { return };
+        let t0 = t0.max(t_start);
+        if t0 < t1 {
+            self.collisions(origin, direction, t0, t1, rng, visit);
+        }
     }
 
     /// Delta tracking along the ray from `origin` along unit `direction` up to `t_max` (may be

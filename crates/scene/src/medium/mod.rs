@@ -34,7 +34,7 @@ use spectrum::tabulated::Tabulated;
 use spectrum::{Rgb, SpectralMode};
 
 pub use grid::{Filter, Grid, Outside, Volume};
-pub use heterogeneous::{Heterogeneous, Tracker};
+pub use heterogeneous::{Heterogeneous, MajorantProfile, Tracker};
 pub use homogeneous::{DistanceSample, sample_distance, transmittance};
 pub use phase::{PhaseFunction, PhaseSample};
 
@@ -242,7 +242,7 @@ impl Media {
         !self.media.is_empty() || self.null_materials.iter().any(|n| *n)
     }
 
-    /// Whether any medium is heterogeneous (only the path tracer renders those).
+    /// Whether any medium is heterogeneous.
     pub fn has_heterogeneous(&self) -> bool {
         self.media.iter().any(|m| m.heterogeneous().is_some())
     }
