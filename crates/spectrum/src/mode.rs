@@ -380,6 +380,11 @@ impl SpectralMode for Hero4 {
     }
     #[inline]
     fn to_rgb(self, w: &Wavelengths4) -> Rgb {
+        // Most estimates of a path are zero (occluded, out of range): the sum below would be +0
+        // in every channel (a zero times a negative weight is −0, and +0 + −0 = +0).
+        if self.is_black() {
+            return Rgb::BLACK;
+        }
         let mut out = [0.0f32; 3];
         for (v, weight) in self.0.iter().zip(&w.to_rgb) {
             for c in 0..3 {

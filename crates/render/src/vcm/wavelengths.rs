@@ -43,6 +43,7 @@
 use math::Rng;
 use scene::Scene;
 use spectrum::SpectralMode;
+use std::borrow::Cow;
 
 /// Offset of the random streams that draw wavelengths (spectral mode only, so RGB renders draw
 /// exactly the numbers they drew before spectral mode existed).
@@ -211,14 +212,14 @@ impl<S: SpectralMode> WavelengthSource<S> {
         S::sample_wavelengths(u, v, self.paired)
     }
 
-    /// The wavelengths of sub-path pair `index` of `iteration`: its own set, its group's, or
-    /// the iteration's shared set.
+    /// The wavelengths of sub-path pair `index` of `iteration`: its own set (drawn), its
+    /// group's, or the iteration's shared set (borrowed: no copy of the set per sub-path).
     #[inline]
-    pub(super) fn get(&self, seed: u64, iteration: u64, index: u64) -> S::Wavelengths {
+    pub(super) fn get(&self, seed: u64, iteration: u64, index: u64) -> Cow<'_, S::Wavelengths> {
         match &self.sets {
-            Sets::PerPair => self.draw(seed, iteration, index),
-            Sets::Shared(w) => *w,
-            Sets::Grouped(layout, sets) => sets[layout.group_of(index as usize)],
+            Sets::PerPair => Cow::Owned(self.draw(seed, iteration, index)),
+            Sets::Shared(w) => Cow::Borrowed(w),
+            Sets::Grouped(layout, sets) => Cow::Borrowed(&sets[layout.group_of(index as usize)]),
         }
     }
 
