@@ -31,8 +31,9 @@
 //! **Merging across groups.** Where no material is dispersive or fluorescent, a camera
 //! sub-path's throughput is a product of BSDF values upsampled linearly from RGB
 //! (`S::from_reflectance`) and of wavelength-independent factors (cosines, pdfs, the filter
-//! weight), so it can be carried at every group's set at once (K spectra, updated by each
-//! scattering step, [`super::subpath::Scattered`]). A camera vertex then merges with the light
+//! weight), so it can be known at every group's set (K spectra from the recorded scattering
+//! steps, [`super::subpath::Scattered`], computed for a group when a merge finds its light
+//! vertices: [`super::merge::GroupThroughputs`]). A camera vertex then merges with the light
 //! vertices of *every* group, each evaluated at its own group's wavelengths, and merging has
 //! N_L samples again, as in RGB mode (`super::merge::MergeScope::AcrossGroups`). Each merged
 //! pair is a path sampled with the photon's wavelength set, whose density is the single-set
