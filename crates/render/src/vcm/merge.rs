@@ -308,3 +308,37 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spectrum::{Hero4, Wavelengths4};
+
+    /// The lazily computed throughputs are bit for bit those of updating every group at every
+    /// step, also for paths longer than the pending buffer (the flush).
+    #[test]
+    fn lazy_group_throughputs_equal_eager_ones() {
+        let mut rng = Rng::for_stream(11, 0, 0);
+        let sets: Vec<Wavelengths4> =
+            (0..7).map(|g| Wavelengths4::sample((g as f32 + 0.3) / 7.0, 0.0, false)).collect();
+        let start = Hero4::splat(0.83);
+        let mut eager = vec![start; sets.len()];
+        let mut lazy = GroupThroughputs::<Hero4>::new(&sets, start);
+        for step in 0..3 * PENDING_STEPS + 5 {
+            let value = Rgb::new(rng.uniform(), rng.uniform(), rng.uniform()) * 0.4;
+            let scattered = Scattered { value, scale: 0.5 + 2.0 * rng.uniform() };
+            for (v, set) in eager.iter_mut().zip(&sets) {
+                *v *= Hero4::from_reflectance(set, scattered.value) * scattered.scale;
+            }
+            lazy.push(scattered);
+            // Ask for some groups now and then, for all at the end.
+            let h = (rng.next_u32() as usize) % sets.len();
+            if step % 3 == 0 {
+                assert_eq!(lazy.get(h).0.map(f32::to_bits), eager[h].0.map(f32::to_bits), "step {step}, group {h}");
+            }
+        }
+        for (h, v) in eager.iter().enumerate() {
+            assert_eq!(lazy.get(h).0.map(f32::to_bits), v.0.map(f32::to_bits), "group {h}");
+        }
+    }
+}
