@@ -242,8 +242,9 @@ pub struct Wavelengths4 {
     pub lambda: [f32; HERO_COUNT],
     /// Their densities per nm ([`crate::wavelengths::visible_pdf`]).
     pub pdf: [f32; HERO_COUNT],
-    /// The upsampling basis (b_r, b_g, b_b) at each wavelength.
-    pub basis: [[f32; 3]; HERO_COUNT],
+    /// The upsampling basis at the wavelengths: `basis[c][j]` is b_c (c = r, g, b) at
+    /// wavelength j (stored by colour so that upsampling is three 4-wide multiply-adds).
+    pub basis: [[f32; HERO_COUNT]; 3],
     /// The emitter factor at each wavelength: D65(λ)·∫ȳ/∫(D65·ȳ).
     pub illuminant: [f32; HERO_COUNT],
     /// Linear-sRGB weight of each wavelength: M_XYZ→sRGB · x̄ȳz̄(λ) / (4 · pdf(λ) · ∫ȳ).
@@ -261,7 +262,7 @@ impl Wavelengths4 {
         let mut w = Wavelengths4 {
             lambda: [0.0; HERO_COUNT],
             pdf: [0.0; HERO_COUNT],
-            basis: [[0.0; 3]; HERO_COUNT],
+            basis: [[0.0; HERO_COUNT]; 3],
             illuminant: [0.0; HERO_COUNT],
             to_rgb: [[0.0; 3]; HERO_COUNT],
             paired,
@@ -285,7 +286,9 @@ impl Wavelengths4 {
             // One table lookup for the basis, D65 and the sRGB colour matching functions (all
             // on the same 5 nm grid).
             if let Some((i, t)) = crate::cie::locate(lambda) {
-                w.basis[j] = crate::upsample::basis_at(i, t);
+                for (row, b) in w.basis.iter_mut().zip(crate::upsample::basis_at(i, t)) {
+                    row[j] = b;
+                }
                 let (srgb_cmf, d65) = crate::cie::srgb_cmf_at(i, t);
                 w.illuminant[j] = d65 * illuminant_scale;
                 let scale = if pdf > 0.0 { norm / pdf } else { 0.0 };
@@ -361,10 +364,8 @@ impl SpectralMode for Hero4 {
     }
     #[inline]
     fn from_reflectance(w: &Wavelengths4, rgb: Rgb) -> Self {
-        Hero4(std::array::from_fn(|j| {
-            let b = &w.basis[j];
-            b[0] * rgb.r + b[1] * rgb.g + b[2] * rgb.b
-        }))
+        let [r, g, b] = &w.basis;
+        Hero4(std::array::from_fn(|j| r[j] * rgb.r + g[j] * rgb.g + b[j] * rgb.b))
     }
     #[inline]
     fn from_emission(w: &Wavelengths4, rgb: Rgb) -> Self {
@@ -380,6 +381,11 @@ impl SpectralMode for Hero4 {
     }
     #[inline]
     fn to_rgb(self, w: &Wavelengths4) -> Rgb {
+        // Most estimates of a path are zero (occluded, out of range): the sum below would be +0
+        // in every channel (a zero times a negative weight is −0, and +0 + −0 = +0).
+        if self.is_black() {
+            return Rgb::BLACK;
+        }
         let mut out = [0.0f32; 3];
         for (v, weight) in self.0.iter().zip(&w.to_rgb) {
             for c in 0..3 {

@@ -11,11 +11,10 @@ use spectrum::SpectralMode;
 use super::connect::{CameraEnd, connect_vertices, next_event};
 use super::light_vertex::LightPath;
 use super::medium::{Arrival, Flight, MediumSide, Scatterer, advance};
-use super::merge::{MergeScope, MergeSource, MergeWeighting, merge};
+use super::merge::{GroupThroughputs, MergeScope, MergeSource, MergeWeighting, merge};
 use super::mis::{self, SubPathMis};
 use super::subpath::{NullSurface, SubPath};
 use super::technique_images::{Record, TechniqueValues};
-use super::wavelengths::MAX_CROSS_GROUPS;
 use super::{Family, FamilyValues, Iteration, Techniques};
 use crate::fluorescent::{FluorescentVertex, view};
 
@@ -108,13 +107,13 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         slots: S::Slots::default(),
         flight: Flight::start(scene.media.camera, false, 0.0),
     };
-    // Merging across wavelength groups: the throughput at every group's wavelengths.
+    // Merging across wavelength groups: the throughput at every group's wavelengths (computed
+    // when a merge needs it).
     let group_sets = match merge_source.map(|s| s.scope) {
         Some(MergeScope::AcrossGroups(_, sets)) => sets,
         _ => &[],
     };
-    let mut group_throughputs = [path.throughput; MAX_CROSS_GROUPS];
-    let group_throughputs = &mut group_throughputs[..group_sets.len()];
+    let mut group_throughputs = (!group_sets.is_empty()).then(|| GroupThroughputs::new(group_sets, path.throughput));
 
     loop {
         let arrival = if media_active {
@@ -221,8 +220,19 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             }
             if let Some(source) = merge_source {
                 let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
-                let merged =
-                    merge(&path, group_throughputs, &end, source, radius, it.max_length, weighting, k, w, rng, out);
+                let merged = merge(
+                    &path,
+                    group_throughputs.as_mut(),
+                    &end,
+                    source,
+                    radius,
+                    it.max_length,
+                    weighting,
+                    k,
+                    w,
+                    rng,
+                    out,
+                );
                 out.record(Family::Merging, 0, t, merged);
                 // Photon mapping stops at the first non-specular vertex; through a mixed
                 // vertex it continues along the specular lobes only.
@@ -240,9 +250,9 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             break;
         };
         path.flight = Flight::start(side.towards(path.ray.direction), false, RAY_EPSILON);
-        for (throughput, set) in group_throughputs.iter_mut().zip(group_sets) {
-            // As `SubPath::scatter` updates `path.throughput` (no fluorescence here).
-            *throughput *= S::from_reflectance(set, scattered.value) * scattered.scale;
+        // No fluorescence here: the step is what `SubPath::scatter` applied.
+        if let Some(throughputs) = &mut group_throughputs {
+            throughputs.push(scattered);
         }
     }
 }
@@ -296,7 +306,7 @@ fn medium_vertex<S: SpectralMode, R: Record>(
     }
     if let Some(source) = merge_source {
         let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
-        let merged = merge(path, &[], &end, source, radius, it.max_length, weighting, k, w, rng, out);
+        let merged = merge(path, None, &end, source, radius, it.max_length, weighting, k, w, rng, out);
         out.record(Family::Merging, 0, t, merged);
         if techniques.ppm {
             return false;

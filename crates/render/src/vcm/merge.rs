@@ -8,7 +8,7 @@ use super::connect::CameraEnd;
 use super::light_vertex::{LightVertex, MergeRecord};
 use super::medium::Scatterer;
 use super::mis::{self, MisConstants};
-use super::subpath::SubPath;
+use super::subpath::{Scattered, SubPath};
 use super::technique_images::Record;
 use crate::fluorescent::view;
 use crate::hash_grid::HashGrid;
@@ -54,9 +54,10 @@ pub enum MergeScope<'a, S: SpectralMode = Rgb> {
     /// camera sub-paths cannot be re-evaluated at other wavelengths: dispersion, fluorescence).
     Group(MergeGroup),
     /// All, each at the wavelengths of its own group (`groups[h]` its grid indices, `sets[h]`
-    /// its wavelengths): the camera sub-path's throughput is carried at every group's set
-    /// (`group_throughputs` of [`merge`]), so a camera vertex merges with all N_L light
-    /// sub-paths, as in RGB mode, while every pixel still sees K wavelength sets.
+    /// its wavelengths): the camera sub-path's throughput is known at every group's set
+    /// ([`GroupThroughputs`], the `group_throughputs` of [`merge`]), so a camera vertex merges
+    /// with all N_L light sub-paths, as in RGB mode, while every pixel still sees K wavelength
+    /// sets.
     AcrossGroups(&'a [MergeGroup], &'a [S::Wavelengths]),
 }
 
@@ -74,16 +75,91 @@ pub struct MergeGroup {
     pub normalization_scale: f32,
 }
 
+/// How many scattering steps [`GroupThroughputs`] keeps before it applies them to every group.
+const PENDING_STEPS: usize = 16;
+
+/// A camera sub-path's throughput at the wavelength set of every group
+/// ([`MergeScope::AcrossGroups`]), brought up to date lazily: the scattering steps
+/// ([`Scattered`]: an RGB BSDF value and a wavelength-free factor) are recorded as the sub-path
+/// is traced and applied to group h only when a merge finds a light vertex of that group
+/// (in scene 1 most merge queries find none). Each group's value is the product of its steps
+/// taken in path order, so it is bit for bit the value of updating every group at every step.
+/// Units: those of the sub-path's throughput (the camera's importance over the sampling
+/// densities, dimensionless for the pinhole camera).
+#[derive(Clone, Debug)]
+pub struct GroupThroughputs<'a, S: SpectralMode> {
+    /// The groups' wavelength sets (empty: no merging across groups).
+    sets: &'a [S::Wavelengths],
+    /// Group h's throughput after its first `applied[h]` pending steps.
+    values: [S; super::wavelengths::MAX_CROSS_GROUPS],
+    /// How many of the pending steps each group's value includes.
+    applied: [u8; super::wavelengths::MAX_CROSS_GROUPS],
+    /// Steps not yet applied to every group, in path order.
+    pending: [Scattered; PENDING_STEPS],
+    /// Number of pending steps.
+    len: usize,
+}
+
+impl<'a, S: SpectralMode> GroupThroughputs<'a, S> {
+    /// The throughputs at `sets` (at most [`super::wavelengths::MAX_CROSS_GROUPS`]; more are
+    /// ignored) of a sub-path whose throughput is `start` at every set (its filter weight).
+    pub fn new(sets: &'a [S::Wavelengths], start: S) -> Self {
+        let sets = &sets[..sets.len().min(super::wavelengths::MAX_CROSS_GROUPS)];
+        let idle = Scattered { value: Rgb::BLACK, scale: 0.0 };
+        Self {
+            sets,
+            values: [start; super::wavelengths::MAX_CROSS_GROUPS],
+            applied: [0; super::wavelengths::MAX_CROSS_GROUPS],
+            pending: [idle; PENDING_STEPS],
+            len: 0,
+        }
+    }
+
+    /// Records a scattering step of the sub-path (as [`SubPath::scatter`] applied it at the
+    /// sub-path's own set; no fluorescence).
+    #[inline]
+    pub fn push(&mut self, step: Scattered) {
+        if self.len == PENDING_STEPS {
+            for h in 0..self.sets.len() {
+                self.catch_up(h);
+            }
+            self.applied = [0; super::wavelengths::MAX_CROSS_GROUPS];
+            self.len = 0;
+        }
+        self.pending[self.len] = step;
+        self.len += 1;
+    }
+
+    /// The throughput at group `h`'s wavelengths (`h` < the number of sets).
+    #[inline]
+    pub fn get(&mut self, h: usize) -> S {
+        self.catch_up(h);
+        self.values[h]
+    }
+
+    /// Applies the pending steps group `h` lacks.
+    #[inline]
+    fn catch_up(&mut self, h: usize) {
+        let set = &self.sets[h];
+        for step in &self.pending[self.applied[h] as usize..self.len] {
+            // As `SubPath::scatter` updates the sub-path's own throughput.
+            self.values[h] *= S::from_reflectance(set, step.value) * step.scale;
+        }
+        self.applied[h] = self.len as u8;
+    }
+}
+
 /// The merged contribution at camera vertex `position` within `radius` (throughput and kernel
-/// normalisation included), in linear sRGB. `group_throughputs[h]` is the camera sub-path's
-/// throughput at the wavelengths of group h ([`MergeScope::AcrossGroups`] only; else empty).
+/// normalisation included), in linear sRGB. `group_throughputs` holds the camera sub-path's
+/// throughput at the wavelengths of every group (required by [`MergeScope::AcrossGroups`],
+/// unused by the other scopes).
 /// When `out` wants per-(s, t) values ([`Record::PER_TECHNIQUE`]), each merged light vertex's
 /// part is also staged there (s = its light sub-path vertices, the merged one included; t = the
 /// camera sub-path's vertices); the caller records the sum.
 #[allow(clippy::too_many_arguments)]
 pub fn merge<S: SpectralMode, R: Record>(
     camera: &SubPath<S>,
-    group_throughputs: &[S],
+    group_throughputs: Option<&mut GroupThroughputs<S>>,
     end: &CameraEnd,
     source: &MergeSource<S>,
     radius: f32,
@@ -102,9 +178,9 @@ pub fn merge<S: SpectralMode, R: Record>(
 }
 
 /// The arguments of [`merge`] that [`merge_with`] passes through.
-type MergeArgs<'a, 'b, S> = (
+type MergeArgs<'a, 'b, 'c, S> = (
     &'a SubPath<S>,
-    &'a [S],
+    Option<&'a mut GroupThroughputs<'c, S>>,
     &'a CameraEnd<'b>,
     &'a MergeSource<'a, S>,
     f32,
@@ -199,8 +275,16 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
             (camera.throughput * view(&camera.slots, sum) * normalization).to_rgb(wavelengths)
         }
         MergeScope::AcrossGroups(groups, sets) => {
+            // The camera pass always passes them with this scope.
+            let Some(group_throughputs) = group_throughputs else {
+                debug_assert!(false, "merging across groups without the group throughputs");
+                return Rgb::BLACK;
+            };
             // No fluorescence here (the engine groups such scenes): the slots are the identity.
             let mut sums = [S::default(); super::wavelengths::MAX_CROSS_GROUPS];
+            // Bit h: group h has a merged light vertex. A group without one adds +0 to the
+            // total, which changes no sum: it is skipped, and its throughput never computed.
+            let mut found = 0u32;
             let indices = grid.sorted_indices();
             grid.for_each_slot_near(position, radius, None, at, |slot| {
                 let index = indices[slot];
@@ -208,16 +292,53 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
                 let light = vertices[slot].as_ref();
                 let Some(part) = part(light, &sets[h]) else { return };
                 sums[h] += part;
+                found |= 1 << h;
                 if R::PER_TECHNIQUE {
-                    let value = group_throughputs[h] * part * normalization;
+                    let value = group_throughputs.get(h) * part * normalization;
                     out.stage_merge(light.path_length() + 1, t, value.to_rgb(&sets[h]));
                 }
             });
             let mut total = Rgb::BLACK;
-            for (h, set) in sets.iter().enumerate() {
-                total += (group_throughputs[h] * sums[h] * normalization).to_rgb(set);
+            while found != 0 {
+                let h = found.trailing_zeros() as usize;
+                found &= found - 1;
+                total += (group_throughputs.get(h) * sums[h] * normalization).to_rgb(&sets[h]);
             }
             total
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spectrum::{Hero4, Wavelengths4};
+
+    /// The lazily computed throughputs are bit for bit those of updating every group at every
+    /// step, also for paths longer than the pending buffer (the flush).
+    #[test]
+    fn lazy_group_throughputs_equal_eager_ones() {
+        let mut rng = Rng::for_stream(11, 0, 0);
+        let sets: Vec<Wavelengths4> =
+            (0..7).map(|g| Wavelengths4::sample((g as f32 + 0.3) / 7.0, 0.0, false)).collect();
+        let start = Hero4::splat(0.83);
+        let mut eager = vec![start; sets.len()];
+        let mut lazy = GroupThroughputs::<Hero4>::new(&sets, start);
+        for step in 0..3 * PENDING_STEPS + 5 {
+            let value = Rgb::new(rng.uniform(), rng.uniform(), rng.uniform()) * 0.4;
+            let scattered = Scattered { value, scale: 0.5 + 2.0 * rng.uniform() };
+            for (v, set) in eager.iter_mut().zip(&sets) {
+                *v *= Hero4::from_reflectance(set, scattered.value) * scattered.scale;
+            }
+            lazy.push(scattered);
+            // Ask for some groups now and then, for all at the end.
+            let h = (rng.next_u32() as usize) % sets.len();
+            if step % 3 == 0 {
+                assert_eq!(lazy.get(h).0.map(f32::to_bits), eager[h].0.map(f32::to_bits), "step {step}, group {h}");
+            }
+        }
+        for (h, v) in eager.iter().enumerate() {
+            assert_eq!(lazy.get(h).0.map(f32::to_bits), v.0.map(f32::to_bits), "group {h}");
         }
     }
 }

@@ -691,7 +691,7 @@ impl<S: SpectralMode> Engine<S> {
                 vertices.clear();
                 let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
                 let wavelengths = sets.get(seed, iteration, index as u64);
-                trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &wavelengths);
+                trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &*wavelengths);
                 let mut rng = crate::splat_frame::camera_stream(seed, iteration, index);
                 let light_path = LightPath::Contiguous(&vertices);
                 let techniques = layout.map(|layout| {
@@ -926,7 +926,7 @@ fn trace_light_chunks<S: SpectralMode>(
             for path in first..(first + LIGHT_CHUNK).min(paths.end) {
                 let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
                 let wavelengths = sets.get(seed, iteration, path as u64);
-                trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats, &wavelengths);
+                trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats, &*wavelengths);
                 ends.push(vertices.len() as u32);
             }
             (vertices, ends, splats)

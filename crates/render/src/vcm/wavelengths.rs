@@ -31,8 +31,9 @@
 //! **Merging across groups.** Where no material is dispersive or fluorescent, a camera
 //! sub-path's throughput is a product of BSDF values upsampled linearly from RGB
 //! (`S::from_reflectance`) and of wavelength-independent factors (cosines, pdfs, the filter
-//! weight), so it can be carried at every group's set at once (K spectra, updated by each
-//! scattering step, [`super::subpath::Scattered`]). A camera vertex then merges with the light
+//! weight), so it can be known at every group's set (K spectra from the recorded scattering
+//! steps, [`super::subpath::Scattered`], computed for a group when a merge finds its light
+//! vertices: [`super::merge::GroupThroughputs`]). A camera vertex then merges with the light
 //! vertices of *every* group, each evaluated at its own group's wavelengths, and merging has
 //! N_L samples again, as in RGB mode (`super::merge::MergeScope::AcrossGroups`). Each merged
 //! pair is a path sampled with the photon's wavelength set, whose density is the single-set
@@ -43,6 +44,7 @@
 use math::Rng;
 use scene::Scene;
 use spectrum::SpectralMode;
+use std::borrow::Cow;
 
 /// Offset of the random streams that draw wavelengths (spectral mode only, so RGB renders draw
 /// exactly the numbers they drew before spectral mode existed).
@@ -71,6 +73,10 @@ pub struct GroupLayout {
     class_group: Vec<u32>,
     /// Number of indices `0..count` in each group.
     sizes: Vec<u32>,
+    /// `x mod K` for every column x (so that [`GroupLayout::group_of`] divides once).
+    column_class: Vec<u32>,
+    /// `(a·y + o) mod K` for every row y of the indices `0..count`.
+    row_class: Vec<u32>,
 }
 
 impl GroupLayout {
@@ -81,12 +87,35 @@ impl GroupLayout {
         let shear = ((groups as f64).sqrt().round() as usize).max(1);
         let offset = (rng.next_u32() as usize) % groups;
         let class_group = permutation(groups, rng);
-        let mut layout = Self { width: width.max(1), shear, offset, class_group, sizes: vec![0; groups] };
-        for index in 0..count {
-            let g = layout.group_of(index);
-            layout.sizes[g] += 1;
-        }
+        let width = width.max(1);
+        let column_class = (0..width).map(|x| (x % groups) as u32).collect();
+        let row_class = (0..count.div_ceil(width)).map(|y| (((shear * y) % groups + offset) % groups) as u32).collect();
+        let sizes = vec![0; groups];
+        let mut layout = Self { width, shear, offset, class_group, sizes, column_class, row_class };
+        let mut sizes = std::mem::take(&mut layout.sizes);
+        layout.for_each_group(count, |_, g| sizes[g] += 1);
+        layout.sizes = sizes;
         layout
+    }
+
+    /// Calls `visit(index, group)` for the indices `0..count` in increasing order: the groups of
+    /// [`GroupLayout::group_of`], found row by row without a division per index.
+    fn for_each_group(&self, count: usize, mut visit: impl FnMut(usize, usize)) {
+        let k = self.count();
+        let (mut start, mut y) = (0, 0);
+        while start < count {
+            let end = (start + self.width).min(count);
+            // The class of the row's first pixel (x = 0); each step right adds one, modulo K.
+            let mut class = ((self.shear * y) % k + self.offset) % k;
+            for index in start..end {
+                visit(index, self.class_group[class] as usize);
+                class += 1;
+                if class == k {
+                    class = 0;
+                }
+            }
+            (start, y) = (end, y + 1);
+        }
     }
 
     /// Number of groups.
@@ -98,7 +127,14 @@ impl GroupLayout {
     #[inline]
     pub fn group_of(&self, index: usize) -> usize {
         let (x, y) = (index % self.width, index / self.width);
-        let class = (x + (self.shear * y) % self.count() + self.offset) % self.count();
+        let class = match self.row_class.get(y) {
+            // The sum of two classes is below 2K: one subtraction reduces it.
+            Some(&row) => {
+                let class = (self.column_class[x] + row) as usize;
+                if class >= self.count() { class - self.count() } else { class }
+            }
+            None => (x + (self.shear * y) % self.count() + self.offset) % self.count(),
+        };
         self.class_group[class] as usize
     }
 
@@ -113,24 +149,25 @@ impl GroupLayout {
     pub fn order_by_group(&self, path_ends: &[u32]) -> (Vec<u32>, Vec<u32>) {
         let mut starts = vec![0u32; self.count() + 1];
         let mut begin = 0;
-        for (path, &end) in path_ends.iter().enumerate() {
-            starts[self.group_of(path) + 1] += end - begin;
+        self.for_each_group(path_ends.len(), |path, g| {
+            let end = path_ends[path];
+            starts[g + 1] += end - begin;
             begin = end;
-        }
+        });
         for g in 0..self.count() {
             starts[g + 1] += starts[g];
         }
         let mut cursor = starts.clone();
         let mut order = vec![0u32; begin as usize];
         let mut begin = 0;
-        for (path, &end) in path_ends.iter().enumerate() {
-            let g = self.group_of(path);
+        self.for_each_group(path_ends.len(), |path, g| {
+            let end = path_ends[path];
             for vertex in begin..end {
                 order[cursor[g] as usize] = vertex;
                 cursor[g] += 1;
             }
             begin = end;
-        }
+        });
         (order, starts)
     }
 }
@@ -211,14 +248,14 @@ impl<S: SpectralMode> WavelengthSource<S> {
         S::sample_wavelengths(u, v, self.paired)
     }
 
-    /// The wavelengths of sub-path pair `index` of `iteration`: its own set, its group's, or
-    /// the iteration's shared set.
+    /// The wavelengths of sub-path pair `index` of `iteration`: its own set (drawn), its
+    /// group's, or the iteration's shared set (borrowed: no copy of the set per sub-path).
     #[inline]
-    pub(super) fn get(&self, seed: u64, iteration: u64, index: u64) -> S::Wavelengths {
+    pub(super) fn get(&self, seed: u64, iteration: u64, index: u64) -> Cow<'_, S::Wavelengths> {
         match &self.sets {
-            Sets::PerPair => self.draw(seed, iteration, index),
-            Sets::Shared(w) => *w,
-            Sets::Grouped(layout, sets) => sets[layout.group_of(index as usize)],
+            Sets::PerPair => Cow::Owned(self.draw(seed, iteration, index)),
+            Sets::Shared(w) => Cow::Borrowed(w),
+            Sets::Grouped(layout, sets) => Cow::Borrowed(&sets[layout.group_of(index as usize)]),
         }
     }
 
@@ -268,6 +305,26 @@ mod tests {
                     }
                 }
                 assert!(count.iter().all(|&c| c == groups), "{groups} groups on {width}×{height}: {count:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn groups_row_by_row_are_those_of_group_of() {
+        let mut rng = Rng::for_stream(5, 0, 0);
+        for (groups, width, count) in [(4, 8, 64), (16, 37, 37 * 23 - 5), (3, 1, 10), (64, 100, 1000), (1, 5, 25)] {
+            let layout = GroupLayout::new(groups, width, count, &mut rng);
+            let mut next = 0;
+            layout.for_each_group(count, |index, g| {
+                assert_eq!((index, g), (next, layout.group_of(index)), "{groups} groups, width {width}");
+                next += 1;
+            });
+            assert_eq!(next, count);
+            // The tables agree with the lattice formula, also past `count` (no table rows there).
+            for index in 0..count + 2 * width {
+                let (x, y) = (index % width, index / width);
+                let class = (x + (layout.shear * y) % groups + layout.offset) % groups;
+                assert_eq!(layout.group_of(index), layout.class_group[class] as usize);
             }
         }
     }
