@@ -19,6 +19,7 @@
 mod common;
 
 use common::BlockEstimate;
+use common::sphere_room::sphere;
 
 use std::sync::Arc;
 
@@ -26,7 +27,6 @@ use math::Vec3;
 use render::RenderSettings;
 use render::vcm::medium::grid_surrogate;
 use scene::Scene;
-use scene::desc::{CameraDesc, FilmDesc, FilterDesc, Geometry, Projection, SceneDescription, ShapeDesc};
 use scene::instance::Affine3A;
 use scene::material::Material;
 use scene::medium::{
@@ -98,40 +98,16 @@ fn grid_room(medium: Medium, resolution: u32, light_behind: bool) -> Scene {
         if light_behind { (Vec3::new(0.3, 0.3, -1.75), 0.1, 80.0) } else { (Vec3::new(0.5, 0.8, 0.5), 0.2, 20.0) };
     let mut media = MediaDesc { media: vec![medium], camera: Some(0), ..Default::default() };
     media.shapes.insert(0, MediumInterface { interior: Some(0), exterior: None });
-    let sphere = |name: &str, center: Vec3, radius: f32, material: u32, emission: Option<Rgb>| ShapeDesc {
-        name: name.into(),
-        geometry: Geometry::Sphere { center, radius, flip_normals: false },
-        material,
-        emission,
-        alpha: None,
-    };
-    let desc = SceneDescription {
-        name: "grid fog room".into(),
-        camera: CameraDesc {
-            position: Vec3::new(0.0, 0.0, -1.5),
-            forward: Vec3::Z,
-            up: Vec3::Y,
-            right: Vec3::X,
-            projection: Projection::Perspective { horizontal_fov_degrees: 60.0 },
-        },
-        film: FilmDesc { width: resolution, height: resolution, filter: FilterDesc::Box },
-        materials: vec![
-            Material::Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) },
-            Material::Diffuse { reflectance: Texture::Constant(Rgb::new(0.7, 0.4, 0.3)) },
-        ],
-        shapes: vec![
-            sphere("room", Vec3::ZERO, 2.0, 0, None),
-            sphere("light", light, light_radius, 0, Some(Rgb::splat(radiance))),
-            sphere("ball", Vec3::new(-0.5, -0.7, 0.6), 0.4, 1, None),
-        ],
-        lights: Vec::new(),
-        max_path_length: None,
-        warnings: Vec::new(),
-        emission_spectra: Default::default(),
-        objects: Vec::new(),
-        instances: Vec::new(),
-        media,
-    };
+    let materials = vec![
+        Material::Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) },
+        Material::Diffuse { reflectance: Texture::Constant(Rgb::new(0.7, 0.4, 0.3)) },
+    ];
+    let shapes = vec![
+        sphere("room", Vec3::ZERO, 2.0, 0, None),
+        sphere("light", light, light_radius, 0, Some(Rgb::splat(radiance))),
+        sphere("ball", Vec3::new(-0.5, -0.7, 0.6), 0.4, 1, None),
+    ];
+    let desc = common::sphere_room::room("grid fog room", resolution, materials, shapes, media);
     Scene::from_description(&desc, None).unwrap().0
 }
 

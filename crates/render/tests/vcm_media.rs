@@ -25,11 +25,11 @@
 mod common;
 
 use common::medium_sphere::{View, medium_sphere};
+use common::sphere_room::sphere;
 use math::Vec3;
 use render::driver::{Budget, Renderer};
 use render::{Algorithm, RenderSettings};
 use scene::Scene;
-use scene::desc::{CameraDesc, FilmDesc, FilterDesc, Geometry, Projection, SceneDescription, ShapeDesc};
 use scene::material::Material;
 use scene::medium::{Coefficient, Coefficients, MediaDesc, Medium, MediumInterface, PhaseFunction};
 use scene::texture::Texture;
@@ -239,64 +239,40 @@ fn fog_room(resolution: u32, around: Around) -> Scene {
     if around == Around::Globe {
         media.shapes.insert(3, MediumInterface { interior: Some(1), exterior: Some(0) });
     }
-    let sphere = |name: &str, center: Vec3, radius: f32, material: u32, emission: Option<Rgb>| ShapeDesc {
-        name: name.into(),
-        geometry: Geometry::Sphere { center, radius, flip_normals: false },
-        material,
-        emission,
-        alpha: None,
-    };
-    let desc = SceneDescription {
-        name: "fog room".into(),
-        camera: CameraDesc {
-            position: Vec3::new(0.0, 0.0, -1.5),
-            forward: Vec3::Z,
-            up: Vec3::Y,
-            right: Vec3::X,
-            projection: Projection::Perspective { horizontal_fov_degrees: 60.0 },
+    let materials = vec![
+        Material::Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) },
+        Material::Diffuse { reflectance: Texture::Constant(Rgb::new(0.7, 0.4, 0.3)) },
+        Material::ThinDielectric {
+            int_ior: 1.5,
+            ext_ior: 1.0,
+            specular_reflectance: Texture::Constant(Rgb::WHITE),
+            specular_transmittance: Texture::Constant(Rgb::WHITE),
         },
-        film: FilmDesc { width: resolution, height: resolution, filter: FilterDesc::Box },
-        materials: vec![
-            Material::Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) },
-            Material::Diffuse { reflectance: Texture::Constant(Rgb::new(0.7, 0.4, 0.3)) },
-            Material::ThinDielectric {
-                int_ior: 1.5,
-                ext_ior: 1.0,
-                specular_reflectance: Texture::Constant(Rgb::WHITE),
-                specular_transmittance: Texture::Constant(Rgb::WHITE),
-            },
-            // The null boundary (`media.null_materials`).
-            Material::Diffuse { reflectance: Texture::Constant(Rgb::BLACK) },
-        ],
-        shapes: match around {
-            Around::Nothing => vec![],
-            Around::Shell => vec![sphere("shell", LIGHT, 0.45, 2, None)],
-            Around::Globe => {
-                let pebble = |offset: Vec3| sphere("pebble", LIGHT + 0.45 * offset, 0.2, 1, None);
-                let axes = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-                std::iter::once(sphere("globe", LIGHT, 0.8, 3, None)).chain(axes.map(pebble)).collect()
-            }
+        // The null boundary (`media.null_materials`).
+        Material::Diffuse { reflectance: Texture::Constant(Rgb::BLACK) },
+    ];
+    let shapes = match around {
+        Around::Nothing => vec![],
+        Around::Shell => vec![sphere("shell", LIGHT, 0.45, 2, None)],
+        Around::Globe => {
+            let pebble = |offset: Vec3| sphere("pebble", LIGHT + 0.45 * offset, 0.2, 1, None);
+            let axes = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+            std::iter::once(sphere("globe", LIGHT, 0.8, 3, None)).chain(axes.map(pebble)).collect()
         }
-        .into_iter()
-        .fold(
-            vec![
-                sphere("room", Vec3::ZERO, 2.0, 0, None),
-                sphere("light", LIGHT, 0.2, 0, Some(Rgb::splat(20.0))),
-                sphere("ball", Vec3::new(-0.5, -0.7, 0.6), 0.4, 1, None),
-            ],
-            |mut shapes, shape| {
-                shapes.push(shape);
-                shapes
-            },
-        ),
-        lights: Vec::new(),
-        max_path_length: None,
-        warnings: Vec::new(),
-        emission_spectra: Default::default(),
-        objects: Vec::new(),
-        instances: Vec::new(),
-        media,
-    };
+    }
+    .into_iter()
+    .fold(
+        vec![
+            sphere("room", Vec3::ZERO, 2.0, 0, None),
+            sphere("light", LIGHT, 0.2, 0, Some(Rgb::splat(20.0))),
+            sphere("ball", Vec3::new(-0.5, -0.7, 0.6), 0.4, 1, None),
+        ],
+        |mut shapes, shape| {
+            shapes.push(shape);
+            shapes
+        },
+    );
+    let desc = common::sphere_room::room("fog room", resolution, materials, shapes, media);
     Scene::from_description(&desc, None).unwrap().0
 }
 

@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod medium_sphere;
+pub mod sphere_room;
 
 use math::Vec2;
 use math::Vec3;
