@@ -76,7 +76,7 @@
 //! around a medium sphere holding the camera: +1.7 % on the camera-inside furnace.)
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
-use scene::medium::{Heterogeneous, Medium, MediumInterface, transmittance};
+use scene::medium::{Heterogeneous, MajorantProfile, Medium, MediumInterface, transmittance};
 use scene::{Bsdf, Scene, SurfaceHit};
 use spectrum::{Rgb, SpectralMode};
 
@@ -259,9 +259,16 @@ pub fn grid_surrogate(
     start: f32,
     end: f32,
 ) -> GridSurrogate {
-    let profile = h.tracker::<Rgb>(scale, &()).majorant_profile(origin, direction, start, end);
-    let pass = (-profile.depth).exp();
-    GridSurrogate { pass, far: profile.at_end * pass, near: profile.at_start * pass }
+    GridSurrogate::from_profile(h.tracker::<Rgb>(scale, &()).majorant_profile(origin, direction, start, end))
+}
+
+impl GridSurrogate {
+    /// The surrogate quantities of a piece whose majorant profile is `profile`.
+    #[inline]
+    fn from_profile(profile: MajorantProfile) -> Self {
+        let pass = (-profile.depth).exp();
+        GridSurrogate { pass, far: profile.at_end * pass, near: profile.at_start * pass }
+    }
 }
 
 /// How a sub-path's flight through a grid piece ended.
@@ -296,13 +303,15 @@ fn advance_grid<S: SpectralMode>(
     let spectral = h.tracker::<S>(m.scale, w);
     let mut weight = S::splat(1.0);
     let mut real = None;
-    rgb.tentative_collisions(start, direction, 0.0, length, rng, |t, mu, rng| {
+    // One walk of the majorant grid gives the collisions and the surrogate densities, one
+    // lookup of the σ_t grid per collision both the RGB and the path's σ_t (the albedo only
+    // at a real event).
+    let profile = rgb.tentative_collisions(start, direction, 0.0, length, rng, |t, mu, rng| {
         let x = start + t * direction;
-        let (rgb_t, _) = rgb.coefficients(x, &());
+        let (sigma_t, rgb_t) = spectral.extinction_with_rgb(&rgb, x, w);
         let q = ((rgb_t.r.min(mu) + rgb_t.g.min(mu) + rgb_t.b.min(mu)) / (3.0 * mu)).clamp(0.0, 1.0);
-        let (sigma_t, sigma_s) = spectral.coefficients(x, w);
         if rng.uniform() < q {
-            weight *= sigma_s * (1.0 / (mu * q));
+            weight *= spectral.scattering(x, w, sigma_t) * (1.0 / (mu * q));
             real = Some(t);
             return false;
         }
@@ -310,8 +319,13 @@ fn advance_grid<S: SpectralMode>(
         !weight.is_black()
     });
     *throughput *= weight;
-    let end = real.unwrap_or(length);
-    let surrogate = grid_surrogate(h, m.scale, start, direction, 0.0, end);
+    let surrogate = match real {
+        Some(_) => GridSurrogate::from_profile(profile),
+        // The walk stopped at a null event that zeroed the throughput: the piece's profile
+        // still covers all of it.
+        None if weight.is_black() => grid_surrogate(h, m.scale, start, direction, 0.0, length),
+        None => GridSurrogate::from_profile(profile),
+    };
     flight.end_piece_with(surrogate.pass, surrogate.far, surrogate.near, real.is_some());
     match real {
         Some(t) => GridOutcome::Scattered(t),

@@ -205,6 +205,19 @@ impl Volume {
         if grid.channels == 1 { tint * rgb.r } else { S::from_reflectance(w, rgb) * tint }
     }
 
+    /// [`Volume::eval`] at world point `p` twice from one grid lookup: at the wavelengths `w`
+    /// with `tint`, and in linear sRGB with `rgb_tint` (`value` evaluated in RGB mode).
+    #[inline]
+    pub fn eval_with_rgb<S: SpectralMode>(&self, p: Vec3, w: &S::Wavelengths, tint: S, rgb_tint: Rgb) -> (S, Rgb) {
+        let Some(grid) = &self.grid else { return (tint, rgb_tint) };
+        let rgb = grid.lookup(self.to_local.transform_point3(p), self.filter, self.outside);
+        if grid.channels == 1 {
+            (tint * rgb.r, rgb_tint * rgb.r)
+        } else {
+            (S::from_reflectance(w, rgb) * tint, rgb * rgb_tint)
+        }
+    }
+
     /// An upper bound of the grid factor over space at the wavelengths, the largest over
     /// the channels (1 without a grid): the RGB upsampling is linear, so each channel is at
     /// most `Σ_k max(b_k, 0)·max_k` for the basis `b` and per-channel maxima `max_k`.

@@ -32,7 +32,7 @@
 
 use glam::{Affine3A, Vec3};
 use math::Rng;
-use spectrum::SpectralMode;
+use spectrum::{Rgb, SpectralMode};
 
 use std::sync::Arc;
 
@@ -82,6 +82,44 @@ pub struct MajorantProfile {
     pub at_start: f32,
     /// `μ` at the interval's end (per scene unit; 0 outside the region).
     pub at_end: f32,
+}
+
+impl MajorantProfile {
+    /// The profile of an interval outside the region: no depth, `μ = 0` at both ends.
+    pub const ZERO: MajorantProfile = MajorantProfile { depth: 0.0, at_start: 0.0, at_end: 0.0 };
+}
+
+/// A [`MajorantProfile`] being summed stretch by stretch along a ray.
+#[derive(Clone, Copy, Debug, Default)]
+struct ProfileSum {
+    /// `∫ μ` over the non-empty stretches so far (unitless).
+    depth: f32,
+    /// `μ` of the first non-empty stretch (per scene unit).
+    first: Option<f32>,
+    /// `μ` of the last non-empty stretch (per scene unit).
+    last: f32,
+}
+
+impl ProfileSum {
+    /// Adds the stretch `[s0, s1]` of majorant `majorant` (skipped when empty).
+    #[inline]
+    fn add(&mut self, s0: f32, s1: f32, majorant: f32) {
+        if s1 > s0 {
+            self.depth += (s1 - s0) * majorant;
+            self.first.get_or_insert(majorant);
+            self.last = majorant;
+        }
+    }
+
+    /// The profile, with `μ` at the start (end) when the summed stretches reach the
+    /// interval's start (end) rather than a face of the region.
+    fn profile(self, reaches_start: bool, reaches_end: bool) -> MajorantProfile {
+        MajorantProfile {
+            depth: self.depth,
+            at_start: if reaches_start { self.first.unwrap_or(0.0) } else { 0.0 },
+            at_end: if reaches_end { self.last } else { 0.0 },
+        }
+    }
 }
 
 impl Heterogeneous {
@@ -136,16 +174,67 @@ impl<S: SpectralMode> Tracker<'_, S> {
     /// σ_t and σ_s at world point `p` (per scene unit; zero outside the region).
     #[inline]
     pub fn coefficients(&self, p: Vec3, w: &S::Wavelengths) -> (S, S) {
-        let local = self.medium.region.transform_point3(p);
-        if !(local.cmpge(Vec3::ZERO).all() && local.cmple(Vec3::ONE).all()) {
+        if !self.inside(p) {
             return (S::default(), S::default());
         }
-        let sigma_t = self.medium.sigma_t.eval::<S>(p, w, self.sigma_t_tint).map(|v| v.clamp(0.0, self.majorant));
+        let sigma_t = self.clamp_extinction(self.medium.sigma_t.eval::<S>(p, w, self.sigma_t_tint));
+        (sigma_t, self.scattering_inside(p, w, sigma_t))
+    }
+
+    /// σ_t at world point `p` (per scene unit; zero outside the region): the first of
+    /// [`Tracker::coefficients`] without looking up the albedo.
+    #[inline]
+    pub fn extinction(&self, p: Vec3, w: &S::Wavelengths) -> S {
+        if !self.inside(p) {
+            return S::default();
+        }
+        self.clamp_extinction(self.medium.sigma_t.eval::<S>(p, w, self.sigma_t_tint))
+    }
+
+    /// σ_t at world point `p` (per scene unit; zero outside the region) at the wavelengths `w`
+    /// and in linear sRGB from one lookup of the σ_t grid: the [`Tracker::extinction`] of this
+    /// tracker and of `rgb`, which must be this medium's RGB tracker with the same scale.
+    #[inline]
+    pub fn extinction_with_rgb(&self, rgb: &Tracker<'_, Rgb>, p: Vec3, w: &S::Wavelengths) -> (S, Rgb) {
+        debug_assert!(std::ptr::eq(self.medium, rgb.medium), "the RGB tracker of another medium");
+        if !self.inside(p) {
+            return (S::default(), Rgb::default());
+        }
+        let (sigma_t, sigma_t_rgb) = self.medium.sigma_t.eval_with_rgb::<S>(p, w, self.sigma_t_tint, rgb.sigma_t_tint);
+        (self.clamp_extinction(sigma_t), rgb.clamp_extinction(sigma_t_rgb))
+    }
+
+    /// σ_s at world point `p` (per scene unit; zero outside the region) given `sigma_t`, this
+    /// tracker's σ_t there ([`Tracker::extinction`]): the second of [`Tracker::coefficients`].
+    #[inline]
+    pub fn scattering(&self, p: Vec3, w: &S::Wavelengths, sigma_t: S) -> S {
+        if !self.inside(p) {
+            return S::default();
+        }
+        self.scattering_inside(p, w, sigma_t)
+    }
+
+    /// Whether world point `p` lies in the region (the medium is empty outside it).
+    #[inline]
+    fn inside(&self, p: Vec3) -> bool {
+        let local = self.medium.region.transform_point3(p);
+        local.cmpge(Vec3::ZERO).all() && local.cmple(Vec3::ONE).all()
+    }
+
+    /// A looked-up σ_t clamped to `[0, σ̄]`.
+    #[inline]
+    fn clamp_extinction(&self, sigma_t: S) -> S {
+        sigma_t.map(|v| v.clamp(0.0, self.majorant))
+    }
+
+    /// σ_s at `p` inside the region, where σ_t is `sigma_t`.
+    #[inline]
+    fn scattering_inside(&self, p: Vec3, w: &S::Wavelengths, sigma_t: S) -> S {
         if let Some(sigma_s) = &self.medium.sigma_s {
-            return (sigma_t, sigma_s.eval::<S>(p, w, self.albedo_tint).map(|v| v.max(0.0)));
+            return sigma_s.eval::<S>(p, w, self.albedo_tint).map(|v| v.max(0.0));
         }
         let albedo = self.medium.albedo.eval::<S>(p, w, self.albedo_tint).map(|a| a.clamp(0.0, 1.0));
-        (sigma_t, sigma_t * albedo)
+        sigma_t * albedo
     }
 
     /// The parameter interval `[t0, t1]` of the ray `origin + t·direction`, `0 ≤ t ≤ t_max`,
@@ -194,10 +283,19 @@ impl<S: SpectralMode> Tracker<'_, S> {
         }
     }
 
+    /// The part `[t0, t1]` of the ray interval `[t_start, t_end]` inside the region (see
+    /// [`Tracker::clip`]), `None` when it is empty.
+    fn span(&self, origin: Vec3, direction: Vec3, t_start: f32, t_end: f32) -> Option<(f32, f32)> {
+        let (t0, t1) = self.clip(origin, direction, t_end)?;
+        let t0 = t0.max(t_start);
+        (t0 < t1).then_some((t0, t1))
+    }
+
     /// The tentative collisions along `[t0, t1]`: a Poisson process at each stretch's majorant
     /// (free flights `−ln(1 − u) / majorant` drawn from `rng`), visited in order as
     /// `visit(t, majorant, rng)` until it returns false. Delta and ratio tracking differ only
-    /// in what they do at a collision.
+    /// in what they do at a collision. Returns the majorant of the stretches walked, up to the
+    /// collision where `visit` stopped (its distance the second value) or to `t1`.
     fn collisions(
         &self,
         origin: Vec3,
@@ -206,22 +304,28 @@ impl<S: SpectralMode> Tracker<'_, S> {
         t1: f32,
         rng: &mut Rng,
         mut visit: impl FnMut(f32, f32, &mut Rng) -> bool,
-    ) {
+    ) -> (ProfileSum, Option<f32>) {
+        let mut sum = ProfileSum::default();
+        let mut stop = None;
         self.stretches(origin, direction, t0, t1, |start, end, majorant| {
-            if majorant <= 0.0 {
-                return true;
-            }
-            let mut t = start;
-            loop {
-                t -= (1.0 - rng.uniform()).ln() / majorant;
-                if t >= end {
-                    return true;
+            if majorant > 0.0 {
+                let mut t = start;
+                loop {
+                    t -= (1.0 - rng.uniform()).ln() / majorant;
+                    if t >= end {
+                        break;
+                    }
+                    if !visit(t, majorant, rng) {
+                        sum.add(start, t, majorant);
+                        stop = Some(t);
+                        return false;
+                    }
                 }
-                if !visit(t, majorant, rng) {
-                    return false;
-                }
             }
+            sum.add(start, end, majorant);
+            true
         });
+        (sum, stop)
     }
 
     /// The piecewise-constant majorant `μ` (per scene unit) along the ray from `origin` along
@@ -231,35 +335,22 @@ impl<S: SpectralMode> Tracker<'_, S> {
     /// Deterministic: it draws no random numbers (the VCM engine's surrogate free-flight
     /// densities are built from it).
     pub fn majorant_profile(&self, origin: Vec3, direction: Vec3, t_start: f32, t_end: f32) -> MajorantProfile {
-        let mut profile = MajorantProfile { depth: 0.0, at_start: 0.0, at_end: 0.0 };
-        let Some((t0, t1)) = self.clip(origin, direction, t_end) else { return profile };
-        let t0 = t0.max(t_start);
-        if t0 >= t1 {
-            return profile;
-        }
-        let (mut first, mut last) = (None, 0.0f32);
+        let Some((t0, t1)) = self.span(origin, direction, t_start, t_end) else { return MajorantProfile::ZERO };
+        let mut sum = ProfileSum::default();
         self.stretches(origin, direction, t0, t1, |s0, s1, majorant| {
-            if s1 > s0 {
-                profile.depth += (s1 - s0) * majorant;
-                first.get_or_insert(majorant);
-                last = majorant;
-            }
+            sum.add(s0, s1, majorant);
             true
         });
-        if t0 <= t_start {
-            profile.at_start = first.unwrap_or(0.0);
-        }
-        if t1 >= t_end {
-            profile.at_end = last;
-        }
-        profile
+        sum.profile(t0 <= t_start, t1 >= t_end)
     }
 
     /// The tentative collisions of the piecewise-constant majorant (see
     /// [`Tracker::majorant_profile`]) along the ray from `origin` along unit `direction` over
     /// `[t_start, t_end]`, in order: `visit(t, μ, rng)` with the distance `t` from `origin` and
     /// the local majorant `μ` (per scene unit), until it returns false. Free flights
-    /// `−ln(1 − u) / μ` are drawn from `rng`.
+    /// `−ln(1 − u) / μ` are drawn from `rng`. Returns the walk's [`Tracker::majorant_profile`]
+    /// over `[t_start, t]`, `t` the collision where `visit` stopped, or over `[t_start, t_end]`
+    /// when it never did (bit for bit: the same stretches summed in the same order).
     pub fn tentative_collisions(
         &self,
         origin: Vec3,
@@ -268,11 +359,15 @@ impl<S: SpectralMode> Tracker<'_, S> {
         t_end: f32,
         rng: &mut Rng,
         visit: impl FnMut(f32, f32, &mut Rng) -> bool,
-    ) {
-        let Some((t0, t1)) = self.clip(origin, direction, t_end) else { return };
-        let t0 = t0.max(t_start);
-        if t0 < t1 {
-            self.collisions(origin, direction, t0, t1, rng, visit);
+    ) -> MajorantProfile {
+        let Some((t0, t1)) = self.span(origin, direction, t_start, t_end) else { return MajorantProfile::ZERO };
+        let (sum, stop) = self.collisions(origin, direction, t0, t1, rng, visit);
+        match stop {
+            // `majorant_profile` over `[t_start, t]` clips the region to end at `t` (< t1);
+            // a collision at `t0` itself leaves that interval empty.
+            Some(t) if t <= t0 => MajorantProfile::ZERO,
+            Some(_) => sum.profile(t0 <= t_start, true),
+            None => sum.profile(t0 <= t_start, t1 >= t_end),
         }
     }
 
@@ -335,13 +430,9 @@ impl<S: SpectralMode> Tracker<'_, S> {
         w: &S::Wavelengths,
     ) -> S {
         let mut carried = S::splat(1.0);
-        let Some((t0, t1)) = self.clip(origin, direction, t_max) else { return carried };
-        let t0 = t0.max(t_min);
-        if t0 >= t1 {
-            return carried;
-        }
+        let Some((t0, t1)) = self.span(origin, direction, t_min, t_max) else { return carried };
         self.collisions(origin, direction, t0, t1, rng, |t, majorant, _| {
-            let (sigma_t, _) = self.coefficients(origin + t * direction, w);
+            let sigma_t = self.extinction(origin + t * direction, w);
             carried *= sigma_t.map(|s| 1.0 - s.min(majorant) / majorant);
             !carried.is_black()
         });
