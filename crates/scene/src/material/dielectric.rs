@@ -50,6 +50,11 @@ impl LeafModel for Dielectric {
         false
     }
 
+    /// A smooth dielectric is oriented by its shading normal alone, as Mitsuba 3's is.
+    fn follows_shading_normal(&self) -> bool {
+        true
+    }
+
     fn lobe_is_delta(&self, _lobe: usize) -> bool {
         true
     }

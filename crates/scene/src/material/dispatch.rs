@@ -37,6 +37,14 @@ pub(super) trait LeafModel {
         true
     }
 
+    /// True for the models that, as a whole material (not inside a blend, a two-sided or a
+    /// normal- or bump-mapped material), follow their shading normal alone: directions need
+    /// not lie on the same side of the geometric and the shading tangent planes
+    /// ([`super::shading::sides_allowed`] with `relaxed`).
+    fn follows_shading_normal(&self) -> bool {
+        false
+    }
+
     /// Whether lobe `lobe` (0 or 1) is a delta lobe.
     fn lobe_is_delta(&self, lobe: usize) -> bool;
 
@@ -230,6 +238,12 @@ impl Model {
     #[inline]
     pub(super) fn one_sided(&self) -> bool {
         each_model!(self, m => m.one_sided())
+    }
+
+    /// See [`LeafModel::follows_shading_normal`].
+    #[inline]
+    pub(super) fn follows_shading_normal(&self) -> bool {
+        each_model!(self, m => m.follows_shading_normal())
     }
 
     /// See [`LeafModel::lobe_is_delta`].

@@ -24,7 +24,8 @@ use crate::texture::TexturePoint;
 #[derive(Clone, Copy, Debug)]
 pub(super) struct ModelBsdf {
     /// Directions need not lie on the same side of the geometric and the shading tangent
-    /// planes (a smooth dielectric without a normal or bump map: [`sides_allowed`]).
+    /// planes (a material that is one leaf model which follows its shading normal alone,
+    /// [`super::dispatch::LeafModel::follows_shading_normal`]: [`sides_allowed`]).
     relaxed: bool,
     /// Shading frame (z = shading normal, flipped to the side of the geometric normal).
     frame: Frame,
@@ -124,9 +125,11 @@ impl ModelBsdf {
         let flat = shading == geometric;
         let frame = ShadingPoint::frame(shading, point.tangent);
         let local_fixed = frame.to_local(fixed);
-        // A smooth dielectric or thin sheet follows its shading normal alone (`sides_allowed`).
-        let relaxed =
-            matches!(material, Material::Dielectric { .. } | Material::ThinDielectric { .. }) && adapter.is_none();
+        // A material that is one leaf model is that model alone; some follow their shading
+        // normal alone (`LeafModel::follows_shading_normal`, `sides_allowed`).
+        let uv = TexturePoint { uv: point.uv, attribute: point.attribute };
+        let leaf = Model::from_leaf(material, uv, hero, None);
+        let relaxed = leaf.is_some_and(|m| m.follows_shading_normal());
         if !sides_allowed(relaxed, cos_fixed_geometric, local_fixed.z) {
             return None;
         }
@@ -155,7 +158,10 @@ impl ModelBsdf {
             count: 0,
             components: [empty; MAX_COMPONENTS],
         };
-        bsdf.add(material, TexturePoint { uv: point.uv, attribute: point.attribute }, 1.0, 1.0, hero);
+        match leaf {
+            Some(model) => bsdf.push(Some(model), 1.0, 1.0),
+            None => bsdf.add(material, uv, 1.0, 1.0, hero),
+        }
         bsdf.select_lobes()?;
         Some(bsdf)
     }

@@ -71,8 +71,9 @@ pub(super) fn consistent(cos_geometric: f32, cos_shading: f32) -> bool {
     cos_geometric * cos_shading > 0.0 && cos_geometric.abs() >= COSINE_EPSILON && cos_shading.abs() >= COSINE_EPSILON
 }
 
-/// The side test of a direction at a BSDF built with `relaxed` (a smooth dielectric or a thin
-/// dielectric sheet, without a normal or bump map) or not: [`consistent`], or with `relaxed`
+/// The side test of a direction at a BSDF built with `relaxed` (a material that is one leaf
+/// model following its shading normal alone, `LeafModel::follows_shading_normal`: a smooth
+/// dielectric or a thin dielectric sheet, without a normal or bump map) or not: [`consistent`], or with `relaxed`
 /// only that neither cosine is grazing (below [`COSINE_EPSILON`]). Such a material is then
 /// oriented by its shading normal alone, as Mitsuba 3's `dielectric` and `thindielectric` are:
 /// a direction that the shading frame refracts, reflects or lets through but that lies on the

@@ -45,6 +45,11 @@ impl LeafModel for ThinDielectric {
         false
     }
 
+    /// A thin dielectric sheet is oriented by its shading normal alone, as Mitsuba 3's is.
+    fn follows_shading_normal(&self) -> bool {
+        true
+    }
+
     fn lobe_is_delta(&self, _lobe: usize) -> bool {
         true
     }
