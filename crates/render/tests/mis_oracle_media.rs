@@ -29,6 +29,8 @@ mod medium_sphere;
 mod mis_media_path;
 #[path = "common/mis_surface.rs"]
 mod mis_surface;
+#[path = "common/sphere_room.rs"]
+mod sphere_room;
 
 use math::{Rng, Vec3};
 use medium_sphere::{View, medium_sphere};

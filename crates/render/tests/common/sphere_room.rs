@@ -18,7 +18,21 @@ pub fn sphere(name: &str, center: Vec3, radius: f32, material: u32, emission: Op
     }
 }
 
-/// A room description at `resolution`² pixels with the given materials, shapes and media.
+/// A perspective camera at `position` looking along +z (up +y), with a horizontal field of
+/// view of `fov_degrees` degrees.
+pub fn camera(position: Vec3, fov_degrees: f32) -> CameraDesc {
+    CameraDesc {
+        position,
+        forward: Vec3::Z,
+        up: Vec3::Y,
+        right: Vec3::X,
+        projection: Projection::Perspective { horizontal_fov_degrees: fov_degrees },
+    }
+}
+
+/// A room description at `resolution`² pixels with the given materials, shapes and media, no
+/// lights besides emitting shapes, seen by the room's [`camera`] (the struct-update syntax
+/// changes the rest).
 pub fn room(
     name: &str,
     resolution: u32,
@@ -28,13 +42,7 @@ pub fn room(
 ) -> SceneDescription {
     SceneDescription {
         name: name.into(),
-        camera: CameraDesc {
-            position: Vec3::new(0.0, 0.0, -1.5),
-            forward: Vec3::Z,
-            up: Vec3::Y,
-            right: Vec3::X,
-            projection: Projection::Perspective { horizontal_fov_degrees: 60.0 },
-        },
+        camera: camera(Vec3::new(0.0, 0.0, -1.5), 60.0),
         film: FilmDesc { width: resolution, height: resolution, filter: FilterDesc::Box },
         materials,
         shapes,
