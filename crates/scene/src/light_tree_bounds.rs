@@ -9,10 +9,7 @@
 //!
 //! `phi · cos θ' / d² · cos θ'_i`
 //!
-//! with `d²` the squared distance to the box centre clamped below by the square of half the
-//! box diagonal (the squared radius of the box's bounding sphere; pbrt-v4 clamps by half the
-//! diagonal itself, a length compared with an area, which made the tree's choices change when
-//! a scene is rescaled: up to 0.3 in a light's probability between a scene and its ×10 copy),
+//! with `d²` the squared distance to the box centre clamped below by half the box diagonal,
 //! `θ' = max(0, θ_w − θ_o − θ_b)` (θ_w: angle between the axis and the direction to `p`; θ_b:
 //! half-angle the box subtends at `p`), zero when `θ' ≥ θ_e`, and `θ'_i = max(0, θ_i − θ_b)`
 //! the receiver's angle (`|cos|`: both sides of the surface; no factor when `n` is zero, a
@@ -67,8 +64,7 @@ impl LightBounds {
     pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
         let center = self.bounds.center();
         let offset = p - center;
-        // Both sides are squared lengths (scene units²), so the importance is scale-invariant.
-        let d2 = offset.length_squared().max(0.25 * self.bounds.extent().length_squared()).max(1e-12);
+        let d2 = offset.length_squared().max(0.5 * self.bounds.extent().length()).max(1e-12);
         let wi = offset.normalize_or_zero();
         let mut cos_w = if wi == Vec3::ZERO { 1.0 } else { self.axis.dot(wi) };
         if self.two_sided {
