@@ -242,9 +242,195 @@ fn split(items: &mut [(u32, LightBounds)], bounds: &Aabb) -> usize {
 
 #[cfg(test)]
 mod tests {
+    use super::LightTree;
+    use crate::light::{AreaLight, BoundingSphere, Light};
+    use crate::shape::Triangle;
+    use math::{Frame, Rng, Vec3};
+    use spectrum::Rgb;
+
     #[test]
     fn nodes_are_64_bytes() {
         // docs/lights-suite.md states the tree's memory from this.
         assert_eq!(std::mem::size_of::<super::Node>(), 64);
+    }
+
+    fn sphere() -> BoundingSphere {
+        BoundingSphere { center: Vec3::ZERO, radius: 10.0 }
+    }
+
+    /// A thin emitting slab like the area light of Mitsuba's `test_homo_area_light`: a tilted
+    /// 2.4 × 0.72 × 0.15 box centred at `(2.2, −0.2, −0.2)`, 12 one-sided triangles with
+    /// outward normals.
+    fn slab() -> Vec<Light> {
+        let frame = Frame::from_z(Vec3::new(0.86, 0.28, -0.43).normalize());
+        let center = Vec3::new(2.2, -0.2, -0.2);
+        let half = [frame.x * 1.2, frame.y * 0.36, frame.z * 0.077];
+        let mut lights = Vec::new();
+        for axis in 0..3 {
+            for sign in [-1.0f32, 1.0] {
+                let (a, b) = (half[(axis + 1) % 3], half[(axis + 2) % 3]);
+                let c = center + half[axis] * sign;
+                let corners = [c - a - b, c + a - b, c + a + b, c - a + b];
+                for t in [[0, 1, 2], [0, 2, 3]] {
+                    let mut tri = Triangle::new(corners[t[0]], corners[t[1]], corners[t[2]]);
+                    if tri.normal.dot(half[axis] * sign) < 0.0 {
+                        tri = Triangle::new(corners[t[0]], corners[t[2]], corners[t[1]]);
+                    }
+                    lights.push(Light::Area(AreaLight::new(tri, Rgb::new(18.4, 11.0, 8.75))));
+                }
+            }
+        }
+        lights
+    }
+
+    /// Points of the scene's medium sphere (centre `(0, −0.1, 0)`, radius 0.75).
+    fn medium_points(rng: &mut Rng, count: usize) -> Vec<Vec3> {
+        let mut points = Vec::new();
+        while points.len() < count {
+            let q = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 1.5 - Vec3::splat(0.75);
+            if q.length() <= 0.75 {
+                points.push(q + Vec3::new(0.0, -0.1, 0.0));
+            }
+        }
+        points
+    }
+
+    fn tree_and_power(lights: &[Light]) -> (LightTree, Vec<f32>) {
+        let powers: Vec<f32> = lights.iter().map(|l| l.power(&sphere())).collect();
+        let total: f32 = powers.iter().sum();
+        let pick: Vec<f32> = powers.iter().map(|p| p / total).collect();
+        (LightTree::build(lights, &sphere(), |i| pick[i as usize]), pick)
+    }
+
+    /// The mean luminance a light sends to a medium point per unit phase function (unoccluded):
+    /// `E[L / p_ω]` over its direct samples (solid-angle measure).
+    fn contribution(light: &Light, p: Vec3, rng: &mut Rng) -> f64 {
+        let samples = 256;
+        let sum: f64 = (0..samples)
+            .filter_map(|_| light.sample_direct(p, rng.uniform2(), &sphere()))
+            .filter(|d| d.direct_pdf.0 > 0.0)
+            .map(|d| f64::from(d.radiance.luminance() / d.direct_pdf.0))
+            .sum();
+        sum / f64::from(samples)
+    }
+
+    #[test]
+    fn without_a_normal_the_importance_drops_only_the_receiver_cosine() {
+        // A point in a medium (n = 0): the bound is the largest over all receiver normals (the
+        // cosine factor is at most one), never zero where an emitter faces the point, and the
+        // same bound a normal along the direction to the light gives.
+        let lights = slab();
+        let mut rng = Rng::new(11, 0);
+        for p in medium_points(&mut rng, 200) {
+            for light in &lights {
+                let b = light.bounds(&sphere()).unwrap();
+                let free = b.importance(p, Vec3::ZERO);
+                assert!(free.is_finite() && free >= 0.0);
+                let towards = (b.bounds.center() - p).normalize();
+                let along = b.importance(p, towards);
+                assert!((along - free).abs() <= 1e-5 * free, "{along} against {free} at {p}");
+                for _ in 0..8 {
+                    let n = math::warp::uniform_sphere(rng.uniform2());
+                    assert!(b.importance(p, n) <= free * (1.0 + 1e-5), "a normal raised the bound at {p}");
+                }
+                let faces = (b.bounds.center() - p).dot(b.axis) < 0.0;
+                if faces {
+                    assert!(free > 0.0, "an emitter facing {p} has importance zero");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn at_medium_points_the_frequencies_follow_probability() {
+        let lights = slab();
+        let (tree, _) = tree_and_power(&lights);
+        let mut rng = Rng::new(12, 0);
+        let samples = 100_000u32;
+        for p in medium_points(&mut rng, 4) {
+            let mut counts = vec![0u32; lights.len() + 1];
+            for _ in 0..samples {
+                match tree.sample(p, Vec3::ZERO, rng.uniform()) {
+                    Some((i, pmf)) => {
+                        let again = tree.probability(p, Vec3::ZERO, i);
+                        assert!((pmf - again).abs() <= 1e-5 * pmf, "sample {pmf}, probability {again}");
+                        counts[i as usize] += 1;
+                    }
+                    None => counts[lights.len()] += 1,
+                }
+            }
+            let mut expected: Vec<f64> = (0..lights.len() as u32)
+                .map(|i| f64::from(samples) * f64::from(tree.probability(p, Vec3::ZERO, i)))
+                .collect();
+            expected.push((f64::from(samples) - expected.iter().sum::<f64>()).max(0.0));
+            let chi2 = |expected: &[f64]| {
+                // Cells expected fewer than 5 times are pooled.
+                let (mut statistic, mut cells, mut po, mut pe) = (0.0, 0u32, 0.0, 0.0);
+                for (&o, &e) in counts.iter().zip(expected) {
+                    if e < 5.0 {
+                        (po, pe) = (po + f64::from(o), pe + e);
+                    } else {
+                        statistic += (f64::from(o) - e).powi(2) / e;
+                        cells += 1;
+                    }
+                }
+                if pe > 0.0 {
+                    statistic += (po - pe).powi(2) / pe.max(1e-9);
+                    cells += 1;
+                }
+                (statistic, f64::from(cells - 1))
+            };
+            // Upper 0.1 % point of χ²(k) (Wilson–Hilferty).
+            let critical = |k: f64| {
+                let a = 2.0 / (9.0 * k);
+                k * (1.0 - a + 3.0902 * a.sqrt()).powi(3)
+            };
+            let (statistic, k) = chi2(&expected);
+            assert!(statistic < critical(k), "χ² = {statistic} with {k} degrees of freedom at {p}");
+            // Power: moving 5 % of the most likely light's mass to the least likely fails.
+            let order: Vec<usize> = {
+                let mut o: Vec<usize> = (0..lights.len()).filter(|&i| expected[i] >= 5.0).collect();
+                o.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
+                o
+            };
+            let (low, top) = (order[0], order[order.len() - 1]);
+            let mut wrong = expected.clone();
+            wrong[low] += 0.05 * wrong[top];
+            wrong[top] *= 0.95;
+            let (bad, _) = chi2(&wrong);
+            assert!(bad > critical(k), "a 5 % shift passes: χ² = {bad}");
+        }
+    }
+
+    #[test]
+    fn at_medium_points_the_tree_selects_better_than_power() {
+        // The variance factor of the light choice alone, Σ c_i² / p_i / (Σ c_i)² (1 for a
+        // choice in proportion to the true contributions c_i, here estimated by sampling each
+        // light), averaged over points of the medium sphere beside the slab: the tree's must be
+        // lower than the power selection's, and it must give every contributing light a
+        // positive probability.
+        let lights = slab();
+        let (tree, power) = tree_and_power(&lights);
+        let mut rng = Rng::new(13, 0);
+        let (mut with_tree, mut with_power) = (0.0, 0.0);
+        let points = medium_points(&mut rng, 60);
+        for &p in &points {
+            let c: Vec<f64> = lights.iter().map(|l| contribution(l, p, &mut rng)).collect();
+            let total: f64 = c.iter().sum();
+            assert!(total > 0.0);
+            let factor = |pick: &dyn Fn(usize) -> f64| {
+                c.iter().enumerate().filter(|(_, c)| **c > 0.0).map(|(i, c)| c * c / pick(i)).sum::<f64>()
+                    / (total * total)
+            };
+            for (i, ci) in c.iter().enumerate() {
+                assert!(*ci == 0.0 || tree.probability(p, Vec3::ZERO, i as u32) > 0.0, "light {i} at {p}");
+            }
+            with_tree += factor(&|i| f64::from(tree.probability(p, Vec3::ZERO, i as u32)));
+            with_power += factor(&|i| f64::from(power[i]));
+        }
+        let n = points.len() as f64;
+        let (with_tree, with_power) = (with_tree / n, with_power / n);
+        eprintln!("selection variance factor at medium points: tree {with_tree:.3}, power {with_power:.3}");
+        assert!(with_tree < 0.9 * with_power, "tree {with_tree} against power {with_power}");
     }
 }
