@@ -259,10 +259,15 @@ impl<'a> Renderer<'a> {
         let rejected = self.pool.install(|| match integrator {
             Integrator::Vcm(engine) => engine.run_iteration(scene, seed, iteration, frame),
             Integrator::PathTracing(tracer) => {
-                render_iteration(scene, seed, iteration, frame, |ray, rng| tracer.radiance(scene, ray, rng))
+                let spectral = tracer.spectral;
+                render_iteration(scene, seed, iteration, frame, |ray, rng, index| {
+                    // Spectral mode: the pixel's wavelengths stratified over the iterations.
+                    let u = spectral.then(|| crate::wavelength_sequence::per_index_sample(seed, iteration, index));
+                    tracer.radiance_at(scene, ray, rng, u)
+                })
             }
             Integrator::EyeLight => {
-                render_iteration(scene, seed, iteration, frame, |ray, _| eye_light::eye_light(scene, &ray))
+                render_iteration(scene, seed, iteration, frame, |ray, _, _| eye_light::eye_light(scene, &ray))
             }
         });
         self.iteration += 1;
@@ -385,7 +390,7 @@ fn render_iteration(
     seed: u64,
     iteration: u64,
     frame: &mut FrameBuffer,
-    radiance: impl Fn(math::Ray, &mut Rng) -> Rgb + Sync,
+    radiance: impl Fn(math::Ray, &mut Rng, u64) -> Rgb + Sync,
 ) -> u64 {
     let width = frame.width as usize;
     let rejected = frame
@@ -399,7 +404,7 @@ fn render_iteration(
                 // Raster position through the filter (weight 1 for the box and when
                 // splatting), then the lens.
                 let primary = scene.camera.sample_primary(x as u32, y as u32, &mut rng);
-                let value = radiance(primary.ray, &mut rng) * primary.weight;
+                let value = radiance(primary.ray, &mut rng, (y * width + x) as u64) * primary.weight;
                 *pixel = if value.is_finite() {
                     value
                 } else {

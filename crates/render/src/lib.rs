@@ -24,6 +24,7 @@ pub mod progressive;
 pub mod splat_frame;
 pub mod vcm;
 pub mod volumetric;
+pub mod wavelength_sequence;
 
 pub use driver::{Algorithm, RenderOutput, RenderSettings, render};
 

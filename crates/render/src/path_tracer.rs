@@ -200,9 +200,18 @@ impl PathTracer {
 
     /// Radiance arriving at the camera along `camera_ray`, as linear sRGB.
     pub fn radiance(&self, scene: &Scene, camera_ray: Ray, rng: &mut Rng) -> Rgb {
+        self.radiance_at(scene, camera_ray, rng, None)
+    }
+
+    /// [`PathTracer::radiance`], in spectral mode with the primary wavelength sample
+    /// `wavelength_sample` ∈ [0, 1) when given (the renderer passes one stratified over the
+    /// iterations of the pixel, [`crate::wavelength_sequence`]); `rng` draws the same numbers
+    /// either way.
+    pub fn radiance_at(&self, scene: &Scene, camera_ray: Ray, rng: &mut Rng, wavelength_sample: Option<f32>) -> Rgb {
         let volumetric = scene.media.is_active();
         if self.spectral {
             let (u, v) = (rng.uniform(), rng.uniform());
+            let u = wavelength_sample.unwrap_or(u);
             let wavelengths = Hero4::sample_wavelengths(u, v, scene.has_fluorescence());
             let value = if volumetric {
                 crate::volumetric::radiance::<Hero4>(self, scene, camera_ray, rng, &wavelengths)
