@@ -167,9 +167,11 @@ struct RenderArgs {
     permissive: bool,
     /// Russian roulette of the path tracer (pt): N = Mitsuba 3's rule from bounce N on
     /// (survival min(max throughput, 0.95)), or `albedo` = the BSDF's continuation probability at
-    /// every bounce (the VCM engine's rule, which the other algorithms always use).
-    #[arg(long, default_value = "albedo", value_name = "N|albedo", value_parser = parse_russian_roulette)]
-    rr_depth: RussianRoulette,
+    /// every bounce (the VCM engine's rule, which the other algorithms always use) [default: the
+    /// scene's: Mitsuba files the file's integrator rr_depth (Mitsuba's default 5), pbrt files and
+    /// built-in scenes albedo].
+    #[arg(long, value_name = "N|albedo", value_parser = parse_russian_roulette)]
+    rr_depth: Option<RussianRoulette>,
     /// MIS heuristic of the path tracer (pt): balance or power (exponent 2).
     #[arg(long, default_value = "balance", value_name = "balance|power", value_parser = parse_heuristic)]
     heuristic: Heuristic,
@@ -369,7 +371,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
 }
 
 /// Parses `--rr-depth`.
-fn parse_russian_roulette(text: &str) -> Result<RussianRoulette, String> {
+pub(crate) fn parse_russian_roulette(text: &str) -> Result<RussianRoulette, String> {
     RussianRoulette::from_name(text).ok_or_else(|| format!("expected a bounce number ≥ 1 or 'albedo', got '{text}'"))
 }
 

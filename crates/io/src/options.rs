@@ -23,6 +23,13 @@ pub struct RenderSettings {
     /// Mitsuba's integrator `hide_emitters`: emitters seen directly by the camera are black.
     /// Not supported by the renderer: `true` only reaches the caller from a permissive load.
     pub hide_emitters: bool,
+    /// Mitsuba's integrator `rr_depth` (`path`, `volpath`, `volpathmis` and the other path
+    /// integrators, also inside `aov`/`moment`): the first bounce (a scattering vertex; the first
+    /// surface hit is bounce 1) at which Mitsuba 3's Russian roulette may end a path, with
+    /// survival probability `min(max throughput component, 0.95)`. A Mitsuba file always has
+    /// one: Mitsuba's default 5 when its integrator does not say or it has none. `None` for
+    /// pbrt files (pbrt-v4's roulette is another rule).
+    pub rr_depth: Option<u32>,
 }
 
 /// A loaded scene and the file's rendering settings.

@@ -23,7 +23,8 @@ pub struct Options {
     pub radius_alpha: Option<f32>,
     pub radius_mode: String,
     pub memory_efficient: bool,
-    pub rr_depth: String,
+    /// `None`: the scene's rule ([`session::resolve_russian_roulette`]).
+    pub rr_depth: Option<String>,
     pub heuristic: String,
     pub light_sampler: String,
     pub max_memory: Option<u64>,
@@ -63,8 +64,13 @@ impl Options {
             anyhow!("unknown radius_mode '{}': expected 'global', 'fixed' or 'per-pixel'", self.radius_mode)
         })?;
         request.memory_efficient = self.memory_efficient;
-        request.russian_roulette = RussianRoulette::from_name(&self.rr_depth)
-            .ok_or_else(|| anyhow!("rr_depth: expected a bounce number >= 1 or 'albedo', got '{}'", self.rr_depth))?;
+        request.russian_roulette = match &self.rr_depth {
+            None => None,
+            Some(name) => Some(
+                RussianRoulette::from_name(name)
+                    .ok_or_else(|| anyhow!("rr_depth: expected a bounce number >= 1 or 'albedo', got '{name}'"))?,
+            ),
+        };
         request.heuristic = Heuristic::from_name(&self.heuristic)
             .ok_or_else(|| anyhow!("heuristic: expected 'balance' or 'power', got '{}'", self.heuristic))?;
         request.light_sampler = LightSampler::from_name(&self.light_sampler)

@@ -47,7 +47,7 @@ impl Notices {
 #[pyfunction]
 #[pyo3(signature = (scene, algorithm = "vcm".to_string(), iterations = None, time = None, resolution = None,
     seed = 0, threads = None, max_length = None, spectral = false, radius_factor = None, radius_alpha = None,
-    radius_mode = "global".to_string(), memory_efficient = false, rr_depth = "albedo".to_string(),
+    radius_mode = "global".to_string(), memory_efficient = false, rr_depth = None,
     heuristic = "balance".to_string(), light_sampler = "tree".to_string(), max_memory = None,
     permissive = false))]
 #[allow(clippy::too_many_arguments)]
@@ -66,7 +66,7 @@ pub fn render<'py>(
     radius_alpha: Option<f32>,
     radius_mode: String,
     memory_efficient: bool,
-    rr_depth: String,
+    rr_depth: Option<String>,
     heuristic: String,
     light_sampler: String,
     max_memory: Option<u64>,
@@ -135,7 +135,7 @@ impl Session {
     #[new]
     #[pyo3(signature = (scene, algorithm = "vcm".to_string(), resolution = None, seed = 0, threads = None,
         max_length = None, spectral = false, radius_factor = None, radius_alpha = None,
-        radius_mode = "global".to_string(), memory_efficient = false, rr_depth = "albedo".to_string(),
+        radius_mode = "global".to_string(), memory_efficient = false, rr_depth = None,
         heuristic = "balance".to_string(), light_sampler = "tree".to_string(), max_memory = None,
         permissive = false, techniques = false,
         technique_length = 4))]
@@ -153,7 +153,7 @@ impl Session {
         radius_alpha: Option<f32>,
         radius_mode: String,
         memory_efficient: bool,
-        rr_depth: String,
+        rr_depth: Option<String>,
         heuristic: String,
         light_sampler: String,
         max_memory: Option<u64>,

@@ -53,7 +53,9 @@ pub struct Recorded {
     pub memory_efficient: bool,
     /// Spectral mode (absent in checkpoints written before it existed: RGB).
     pub spectral: bool,
-    /// Russian roulette of the path tracer.
+    /// Russian roulette of the path tracer, as resolved for the render
+    /// ([`crate::resolve_russian_roulette`]; absent in checkpoints written before it existed:
+    /// the albedo rule, then the only one).
     pub russian_roulette: RussianRoulette,
     /// MIS heuristic of the path tracer.
     pub heuristic: Heuristic,
@@ -228,7 +230,8 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
             Some(_) => field(&fields, "spectral").ok_or_else(|| missing("spectral"))?,
         },
         russian_roulette: match fields.get("russian_roulette") {
-            None => RussianRoulette::default(),
+            // Checkpoints from before the policy was recorded were rendered with the albedo rule.
+            None => RussianRoulette::Albedo,
             Some(name) => RussianRoulette::from_name(name).ok_or_else(|| missing("russian_roulette"))?,
         },
         heuristic: match fields.get("heuristic") {

@@ -31,7 +31,7 @@ mod summary;
 
 pub use budget::{Checkpointing, checkpoint_saver, run_budget};
 pub use live::Live;
-pub use prepare::Prepared;
+pub use prepare::{Prepared, resolve_russian_roulette};
 pub use render::progressive::Progressive;
 pub use request::{Request, radius_mode_from_name, radius_mode_name};
 pub use run::{DEFAULT_ITERATIONS, Observer, Outcome, render, render_on};

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use render::driver::Budget;
+use render::path_tracer::RussianRoulette;
 use render::vcm::technique_images::TechniqueLayout;
 use render::{Algorithm, RenderSettings};
 use scene::filter::FilmMode;
@@ -20,6 +21,19 @@ use crate::request::{Request, radius_mode_from_name, radius_mode_name};
 use crate::run::{DEFAULT_ITERATIONS, Observer, validate};
 use crate::slice::SliceSpec;
 use crate::source::{LoadedScene, SceneSource, load_scene, scene_source};
+
+/// The path tracer's Russian roulette: the one `asked` for (the command line's `--rr-depth`,
+/// Python's `rr_depth=`, a resumed checkpoint's), else the scene file's: Mitsuba 3's rule
+/// ([`RussianRoulette::Throughput`], survival `min(max throughput component, 0.95)`) from the
+/// file's `rr_depth` (`file_rr_depth`, [`io::RenderSettings::rr_depth`]; Mitsuba's default 5
+/// when its integrator does not say), else (pbrt files, built-in scenes) the albedo rule
+/// ([`RussianRoulette::Albedo`]).
+pub fn resolve_russian_roulette(asked: Option<RussianRoulette>, file_rr_depth: Option<u32>) -> RussianRoulette {
+    asked.unwrap_or(match file_rr_depth {
+        Some(start) => RussianRoulette::Throughput { start },
+        None => RussianRoulette::Albedo,
+    })
+}
 
 /// A render session ready for its first iteration.
 pub struct Prepared {
@@ -69,7 +83,7 @@ impl Prepared {
                 })?;
                 request.memory_efficient = recorded.memory_efficient;
                 request.spectral = recorded.spectral;
-                request.russian_roulette = recorded.russian_roulette;
+                request.russian_roulette = Some(recorded.russian_roulette);
                 request.heuristic = recorded.heuristic;
                 request.light_sampler = recorded.light_sampler;
                 let mode = FilmMode::from_name(&recorded.film)
@@ -170,7 +184,8 @@ impl Prepared {
         if let Some(line) = &loaded.loaded {
             observer.notice(Notice::Progress(line.clone()));
         }
-        let LoadedScene { mut scene, file_max_length, file_samples, fingerprint, .. } = loaded;
+        let LoadedScene { mut scene, file_max_length, file_samples, file_rr_depth, fingerprint, .. } = loaded;
+        let russian_roulette = resolve_russian_roulette(r.russian_roulette, file_rr_depth);
         if let Some((_, recorded, path)) = &resumed
             && let Some(difference) = fingerprint.difference(recorded)
         {
@@ -195,7 +210,7 @@ impl Prepared {
             radius_mode: r.radius_mode,
             memory_efficient: r.memory_efficient,
             spectral: r.spectral,
-            russian_roulette: r.russian_roulette,
+            russian_roulette,
             heuristic: r.heuristic,
             light_sampler: r.light_sampler,
             // Checkpoints always carry the sums of squares, so that any resume can ask for a
@@ -247,7 +262,7 @@ impl Prepared {
             radius_mode: radius_mode_name(r.radius_mode).to_string(),
             memory_efficient: settings.memory_efficient,
             spectral: r.spectral,
-            russian_roulette: r.russian_roulette,
+            russian_roulette,
             heuristic: r.heuristic,
             light_sampler: r.light_sampler,
             film: scene.camera.film.name().to_string(),
@@ -256,6 +271,8 @@ impl Prepared {
             slice,
         };
 
+        // The request states the policy used (the summary line names it).
+        request.russian_roulette = Some(russian_roulette);
         Ok(Self {
             resumed_iterations: resumed.as_ref().filter(|(_, path)| path.is_some()).map(|(film, _)| film.iterations()),
             resumed: resumed.map(|(film, _)| film),

@@ -139,6 +139,7 @@ fn summary(
         scene: scene.to_string(),
         algorithm: r.algorithm.name(),
         spectral: r.spectral,
+        russian_roulette: r.russian_roulette.filter(|_| r.algorithm == Algorithm::PathTracing),
         resolution: (film.width(), film.height()),
         iterations: film.iterations(),
         resumed_after: resumed_iterations,

@@ -55,6 +55,10 @@ pub struct LoadedScene {
     pub file_max_length: Option<u32>,
     /// Samples per pixel the file asks for (its sampler), if any.
     pub file_samples: Option<u64>,
+    /// The first bounce of Mitsuba 3's Russian roulette the file asks for
+    /// ([`io::RenderSettings::rr_depth`]: every Mitsuba file has one, default 5; `None` for
+    /// pbrt files and built-in scenes).
+    pub file_rr_depth: Option<u32>,
     /// What the scene was built from (checkpoints record it).
     pub fingerprint: Fingerprint,
     /// Loader warnings (skipped optional attributes) for the user.
@@ -81,6 +85,7 @@ pub fn load_scene(source: &SceneSource, resolution: Option<(u32, u32)>, permissi
                 scene,
                 file_max_length: None,
                 file_samples: None,
+                file_rr_depth: None,
                 fingerprint: Fingerprint::builtin(*mask, (width, height)),
                 warnings: Vec::new(),
                 loaded: None,
@@ -95,6 +100,7 @@ pub fn load_scene(source: &SceneSource, resolution: Option<(u32, u32)>, permissi
                 anyhow::anyhow!(message)
             })?;
             let file_samples = loaded.settings.samples_per_pixel.map(u64::from);
+            let file_rr_depth = loaded.settings.rr_depth;
             let desc = loaded.description;
             let (scene, report) =
                 Scene::from_description(&desc, resolution).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
@@ -115,6 +121,7 @@ pub fn load_scene(source: &SceneSource, resolution: Option<(u32, u32)>, permissi
                 scene,
                 file_max_length: Some(desc.max_path_length.unwrap_or(UNLIMITED_PATH_LENGTH)),
                 file_samples,
+                file_rr_depth,
                 fingerprint: Fingerprint::of_files(&files, defines)?,
                 warnings: desc.warnings.clone(),
                 loaded: Some(loaded),

@@ -2,6 +2,8 @@
 
 use std::fmt;
 
+use render::path_tracer::RussianRoulette;
+
 /// What a render did, for the summary line ([`fmt::Display`] gives the line `vcm render`
 /// prints).
 #[derive(Clone, Debug, PartialEq)]
@@ -12,6 +14,9 @@ pub struct Summary {
     pub algorithm: &'static str,
     /// Spectral mode.
     pub spectral: bool,
+    /// The path tracer's Russian roulette (`None` for the other algorithms, which always use
+    /// the albedo rule); the line names it as `--rr-depth` spells it.
+    pub russian_roulette: Option<RussianRoulette>,
     /// Image size in pixels.
     pub resolution: (u32, u32),
     /// Iterations in the film (a resumed checkpoint's included).
@@ -61,6 +66,13 @@ impl fmt::Display for Summary {
             }
             None => String::new(),
         };
+        let options: Vec<String> = self
+            .spectral
+            .then(|| "spectral".to_string())
+            .into_iter()
+            .chain(self.russian_roulette.map(|rr| format!("rr-depth {}", rr.name())))
+            .collect();
+        let options = if options.is_empty() { String::new() } else { format!(" ({})", options.join(", ")) };
         let rejected = if self.rejected_by_family.is_empty() {
             String::new()
         } else {
@@ -69,11 +81,10 @@ impl fmt::Display for Summary {
         };
         write!(
             f,
-            "{}{} with {}{} at {}x{}: {} iterations{slice}{resumed} in {:.2} s ({:.1} ms/iteration, {} threads{ranks}{vertices}), {} rejected samples{rejected} -> {}",
+            "{}{} with {}{options} at {}x{}: {} iterations{slice}{resumed} in {:.2} s ({:.1} ms/iteration, {} threads{ranks}{vertices}), {} rejected samples{rejected} -> {}",
             if self.interrupted { "interrupted: " } else { "" },
             self.scene,
             self.algorithm,
-            if self.spectral { " (spectral)" } else { "" },
             self.resolution.0,
             self.resolution.1,
             self.iterations,

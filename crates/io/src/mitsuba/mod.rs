@@ -21,7 +21,9 @@
 //!   `rectangle`/`disk` consider the front). For meshes *without* vertex normals Mitsuba itself
 //!   takes the normal from the transformed triangle, so there a mirrored emitter would emit to
 //!   the other side in Mitsuba;
-//! - `max_depth` counts path segments (−1 = unlimited);
+//! - `max_depth` counts path segments (−1 = unlimited); `rr_depth` (default 5) is kept in
+//!   [`RenderSettings::rr_depth`](crate::RenderSettings::rr_depth) for the path tracer's
+//!   Russian roulette;
 //! - spectra become linear sRGB as in Mitsuba's RGB variants (`colour`); emitters given by a
 //!   tabulated, constant or blackbody spectrum also keep it
 //!   ([`SceneDescription::emission_spectra`]) for spectral rendering;
@@ -92,7 +94,7 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDescriptio
 }
 
 /// Loads a Mitsuba 3 XML scene with `options` and returns the file's rendering settings
-/// (`<sampler>` `sample_count`, integrator `hide_emitters`) too.
+/// (`<sampler>` `sample_count`, integrator `hide_emitters` and `rr_depth`) too.
 pub fn load_with(path: &Path, defines: &[(String, String)], options: &LoadOptions) -> Result<LoadedScene, SceneError> {
     let mut warnings = Vec::new();
     let parsed = xml::parse_scene(path, defines, &mut warnings)?;
@@ -103,7 +105,9 @@ pub fn load_with(path: &Path, defines: &[(String, String)], options: &LoadOption
     for node in &parsed.elements {
         loader.top_level(node)?;
     }
-    let settings = loader.settings;
+    let mut settings = loader.settings;
+    // Mitsuba's path integrators start their roulette at bounce 5 unless told otherwise.
+    settings.rr_depth.get_or_insert(sensor::MITSUBA_RR_DEPTH);
     Ok(LoadedScene { description: loader.finish(path)?, settings })
 }
 

@@ -9,6 +9,9 @@ use super::transform::{Mat4, cross, dot, length, normalize, positive, to_vec3};
 use super::xml::Node;
 use crate::scene_error::SceneError;
 
+/// Mitsuba 3's default `rr_depth` (bounces before its Russian roulette starts).
+pub(crate) const MITSUBA_RR_DEPTH: u32 = 5;
+
 /// Mitsuba's film size when none is given.
 const DEFAULT_FILM: (u32, u32) = (768, 576);
 
@@ -276,8 +279,9 @@ impl<'a> Loader<'a> {
         Ok(())
     }
 
-    /// An `<integrator>`: its maximum path length and `hide_emitters` are used. `aov` and
-    /// `moment` wrap other integrators: the first nested `<integrator>` gives the depth.
+    /// An `<integrator>`: its maximum path length, `rr_depth` and `hide_emitters` are used.
+    /// `aov` and `moment` wrap other integrators: the first nested `<integrator>` gives the
+    /// depth and `rr_depth`.
     pub(crate) fn integrator(&mut self, node: &'a Node) -> Result<(), SceneError> {
         if self.integrator_seen {
             self.warnings.push(format!("{}: second <integrator> ignored", node.pos.location()));
@@ -305,7 +309,17 @@ impl<'a> Loader<'a> {
         };
         let where_ = node.pos.location();
         let result = match p.ty.as_str() {
-            "path" | "volpath" | "volpathmis" | "bdpt" | "ptracer" | "prb" | "prbvolpath" => depth,
+            "path" | "volpath" | "volpathmis" | "bdpt" | "ptracer" | "prb" | "prbvolpath" => {
+                if let Some(rr_depth) = p.integer("rr_depth")? {
+                    // Mitsuba 3 refuses rr_depth ≤ 0 too.
+                    let start = u32::try_from(rr_depth).ok().filter(|&d| d >= 1).ok_or_else(|| {
+                        let pos = p.prop("rr_depth").map_or_else(|| node.pos.clone(), |q| q.pos.clone());
+                        pos.error(format!("{}: 'rr_depth' must be an integer ≥ 1, got {rr_depth}", p.what()))
+                    })?;
+                    self.settings.rr_depth = Some(start);
+                }
+                depth
+            }
             "direct" => {
                 self.warnings.push(format!(
                     "{where_}: integrator 'direct' is rendered as paths of at most 2 segments (direct lighting)"
