@@ -167,11 +167,12 @@ struct RenderArgs {
     permissive: bool,
     /// Russian roulette of the path tracer (pt): N = Mitsuba 3's rule from bounce N on
     /// (survival min(max throughput, 0.95)), or `albedo` = the BSDF's continuation probability at
-    /// every bounce (the VCM engine's rule, which the other algorithms always use) [default: the
-    /// scene's: Mitsuba files the file's integrator rr_depth (Mitsuba's default 5), pbrt files and
-    /// built-in scenes albedo].
-    #[arg(long, value_name = "N|albedo", value_parser = parse_russian_roulette)]
-    rr_depth: Option<RussianRoulette>,
+    /// every bounce (the VCM engine's rule, which the other algorithms always use), or `file` =
+    /// the scene file's: Mitsuba's rule from the file's integrator rr_depth (Mitsuba's default
+    /// 5) for Mitsuba files, albedo for pbrt files and built-in scenes. The default, albedo,
+    /// measured more efficient (docs/performance.md, "Russian roulette from the scene file").
+    #[arg(long, default_value = "albedo", value_name = "N|albedo|file", value_parser = parse_russian_roulette)]
+    rr_depth: RouletteArg,
     /// MIS heuristic of the path tracer (pt): balance or power (exponent 2).
     #[arg(long, default_value = "balance", value_name = "balance|power", value_parser = parse_heuristic)]
     heuristic: Heuristic,
@@ -353,7 +354,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         checkpoint_every: Duration::from_secs_f64(args.checkpoint_every),
         resume: args.resume,
         permissive: args.permissive,
-        russian_roulette: args.rr_depth,
+        russian_roulette: args.rr_depth.0,
         heuristic: args.heuristic,
         light_sampler: args.light_sampler,
         film: args.film,
@@ -370,9 +371,19 @@ fn run_render(args: RenderArgs) -> Result<()> {
     }
 }
 
+/// The value of `--rr-depth`: a rule, or `file` (`None`: the scene file's rule,
+/// `session::resolve_russian_roulette`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RouletteArg(pub Option<RussianRoulette>);
+
 /// Parses `--rr-depth`.
-pub(crate) fn parse_russian_roulette(text: &str) -> Result<RussianRoulette, String> {
-    RussianRoulette::from_name(text).ok_or_else(|| format!("expected a bounce number ≥ 1 or 'albedo', got '{text}'"))
+pub(crate) fn parse_russian_roulette(text: &str) -> Result<RouletteArg, String> {
+    if text == "file" {
+        return Ok(RouletteArg(None));
+    }
+    RussianRoulette::from_name(text)
+        .map(|rule| RouletteArg(Some(rule)))
+        .ok_or_else(|| format!("expected a bounce number ≥ 1, 'albedo' or 'file', got '{text}'"))
 }
 
 /// Parses `--film`.

@@ -23,7 +23,8 @@ pub struct Options {
     pub radius_alpha: Option<f32>,
     pub radius_mode: String,
     pub memory_efficient: bool,
-    /// `None`: the scene's rule ([`session::resolve_russian_roulette`]).
+    /// `None`: the library's default (albedo); `file`: the scene file's rule
+    /// ([`session::resolve_russian_roulette`]).
     pub rr_depth: Option<String>,
     pub heuristic: String,
     pub light_sampler: String,
@@ -64,13 +65,14 @@ impl Options {
             anyhow!("unknown radius_mode '{}': expected 'global', 'fixed' or 'per-pixel'", self.radius_mode)
         })?;
         request.memory_efficient = self.memory_efficient;
-        request.russian_roulette = match &self.rr_depth {
-            None => None,
-            Some(name) => Some(
-                RussianRoulette::from_name(name)
-                    .ok_or_else(|| anyhow!("rr_depth: expected a bounce number >= 1 or 'albedo', got '{name}'"))?,
-            ),
-        };
+        request.russian_roulette =
+            match self.rr_depth.as_deref() {
+                None => request.russian_roulette,
+                Some("file") => None,
+                Some(name) => Some(RussianRoulette::from_name(name).ok_or_else(|| {
+                    anyhow!("rr_depth: expected a bounce number >= 1, 'albedo' or 'file', got '{name}'")
+                })?),
+            };
         request.heuristic = Heuristic::from_name(&self.heuristic)
             .ok_or_else(|| anyhow!("heuristic: expected 'balance' or 'power', got '{}'", self.heuristic))?;
         request.light_sampler = LightSampler::from_name(&self.light_sampler)

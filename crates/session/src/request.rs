@@ -74,10 +74,10 @@ pub struct Request {
     /// length, radius, memory-efficient and spectral settings come from it (those fields are
     /// ignored), and it is checkpointed to again unless `checkpoint` is set.
     pub resume: Option<PathBuf>,
-    /// Russian roulette of the path tracer (`pt`). `None`: the scene's rule
-    /// ([`crate::resolve_russian_roulette`]: Mitsuba 3's throughput rule from the file's
-    /// `rr_depth`, default 5, for Mitsuba files; the albedo rule for pbrt files and built-in
-    /// scenes). A resumed render keeps its checkpoint's.
+    /// Russian roulette of the path tracer (`pt`); by default the albedo rule. `None`: the scene
+    /// file's rule ([`crate::resolve_russian_roulette`]: Mitsuba 3's throughput rule from the
+    /// file's `rr_depth`, default 5, for Mitsuba files; the albedo rule for pbrt files and
+    /// built-in scenes). A resumed render keeps its checkpoint's.
     pub russian_roulette: Option<RussianRoulette>,
     /// MIS heuristic of the path tracer (`pt`).
     pub heuristic: Heuristic,
@@ -127,7 +127,7 @@ impl Request {
             checkpoint: None,
             checkpoint_every: Duration::from_secs(60),
             resume: None,
-            russian_roulette: None,
+            russian_roulette: Some(RussianRoulette::Albedo),
             heuristic: defaults.heuristic,
             light_sampler: defaults.light_sampler,
             film: None,

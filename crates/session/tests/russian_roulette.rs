@@ -1,6 +1,7 @@
-//! The path tracer's Russian roulette is resolved in one place: an explicit request wins, else a
-//! Mitsuba file's integrator `rr_depth` (Mitsuba's default 5 when it does not say) gives Mitsuba
-//! 3's throughput rule, else (built-in scenes) the albedo rule. The summary line and the
+//! The path tracer's Russian roulette is resolved in one place: an explicit rule wins (the
+//! library's default is the albedo rule); a request for the scene file's rule (`None`) gives a
+//! Mitsuba file's integrator `rr_depth` (Mitsuba's default 5 when it does not say) with Mitsuba
+//! 3's throughput rule, and the albedo rule for built-in scenes. The summary line and the
 //! checkpoint state the policy used, and a resumed render keeps it.
 
 use std::fs;
@@ -61,7 +62,7 @@ fn resolved(request: &Request) -> RussianRoulette {
 }
 
 #[test]
-fn the_files_rr_depth_is_the_default_and_an_explicit_option_overrides_it() {
+fn the_files_rr_depth_is_used_when_asked_and_an_explicit_option_overrides_it() {
     let three = scene_file(&scratch("file-three"), r#"<integer name="rr_depth" value="3"/>"#);
     let silent = scene_file(&scratch("file-silent"), "");
     assert_eq!(resolved(&request(&three, None)), RussianRoulette::Throughput { start: 3 });
@@ -79,6 +80,12 @@ fn the_files_rr_depth_is_the_default_and_an_explicit_option_overrides_it() {
         resolved(&Request { russian_roulette: Some(RussianRoulette::Throughput { start: 2 }), ..builtin }),
         RussianRoulette::Throughput { start: 2 }
     );
+    // A request that leaves the choice to the library gets the albedo rule (measured more
+    // efficient, docs/performance.md), also for a file that names an rr_depth; `None` (the CLI's
+    // `--rr-depth file`) asks for the file's.
+    let default = Request::new(session::scene_source(three.to_str().unwrap(), &[]).unwrap());
+    assert_eq!(default.russian_roulette, Some(RussianRoulette::Albedo));
+    assert_eq!(resolved(&request(&three, default.russian_roulette)), RussianRoulette::Albedo);
     // The same rule as the library function.
     assert_eq!(session::resolve_russian_roulette(None, None), RussianRoulette::Albedo);
     assert_eq!(session::resolve_russian_roulette(None, Some(4)), RussianRoulette::Throughput { start: 4 });

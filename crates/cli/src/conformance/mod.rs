@@ -76,10 +76,10 @@ pub struct ConformanceArgs {
     /// Light sampler of the path tracer, as `vcm render --light-sampler`.
     #[arg(long, default_value = "tree", value_name = "tree|power", value_parser = crate::parse_light_sampler)]
     pub light_sampler: render::path_tracer::LightSampler,
-    /// Russian roulette of the path tracer, as `vcm render --rr-depth` [default: the scene
-    /// file's integrator rr_depth, Mitsuba's default 5].
-    #[arg(long, value_name = "N|albedo", value_parser = crate::parse_russian_roulette)]
-    pub rr_depth: Option<render::path_tracer::RussianRoulette>,
+    /// Russian roulette of the path tracer, as `vcm render --rr-depth` (`file`: the scene
+    /// file's integrator rr_depth, Mitsuba's default 5).
+    #[arg(long, default_value = "albedo", value_name = "N|albedo|file", value_parser = crate::parse_russian_roulette)]
+    pub rr_depth: crate::RouletteArg,
     /// Film mode, as `vcm render --film` [default: splat, the scene files' default].
     #[arg(long, value_name = "splat|fis", value_parser = crate::parse_film)]
     pub film: Option<scene::filter::FilmMode>,
@@ -227,7 +227,7 @@ fn render_and_judge(
     request.keep_variance = true;
     request.film = args.film;
     request.light_sampler = args.light_sampler;
-    request.russian_roulette = args.rr_depth;
+    request.russian_roulette = args.rr_depth.0;
     let rendered = catch(|| session::render(&request, None, &mut Quiet));
     let film = match rendered {
         Ok(outcome) => outcome.output.film,
