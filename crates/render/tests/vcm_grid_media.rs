@@ -165,8 +165,8 @@ fn lt_matches_pt_in_a_chromatic_grid_room() {
 #[test]
 fn bpt_vcm_match_pt_in_a_tinted_grid_room_spectral() {
     let scene = grid_room(blob(false), 32, false);
-    let pt = estimate(&scene, "pt", true, 0.0, 1000, 5);
-    matches_pt("bpt", &estimate(&scene, "bpt", true, 0.003, 500, 6), &pt);
+    let pt = estimate(&scene, "pt", true, 0.0, 4000, 5);
+    matches_pt("bpt", &estimate(&scene, "bpt", true, 0.003, 2000, 6), &pt);
     matches_pt("vcm", &estimate(&scene, "vcm", true, VCM_RADIUS_FACTOR, 800, 7), &pt);
 }
 
