@@ -138,9 +138,9 @@ impl RussianRoulette {
 }
 
 impl Default for RussianRoulette {
-    /// The albedo rule: the library's default, which render sessions keep for built-in scenes
-    /// and pbrt files (Mitsuba files get Mitsuba's rule from their `rr_depth`, see
-    /// `session::resolve_russian_roulette`). Measured (docs/performance.md, "Russian roulette
+    /// The albedo rule: the library's default, which render sessions keep unless asked for
+    /// another rule or for the scene file's (`--rr-depth file`: Mitsuba files then get Mitsuba's
+    /// rule from their `rr_depth`, see `session::resolve_russian_roulette`). Measured (docs/performance.md, "Russian roulette
     /// from the scene file"; per-sample relative variance × callgrind instructions per sample):
     /// 1.29× better than `Throughput { start: 5 }` on Mitsuba's Cornell box, equal within 1 %
     /// on its matpreview.

@@ -24,7 +24,7 @@ pub(crate) const WAVELENGTH_STREAM: u64 = 1 << 61;
 const PHI: f64 = 0.618_033_988_749_894_8;
 
 /// The largest `f32` below 1 (a primary sample must stay in [0, 1)).
-const ONE_MINUS: f32 = 1.0 - f32::EPSILON / 2.0;
+pub(crate) const ONE_MINUS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// `frac(start + step·φ)`, in [0, 1): element `step` of the golden-ratio sequence rotated by
 /// `start` ∈ [0, 1).

@@ -51,7 +51,7 @@ use scene::Scene;
 use spectrum::SpectralMode;
 use std::borrow::Cow;
 
-use crate::wavelength_sequence::{WAVELENGTH_STREAM, kronecker, per_index_sample};
+use crate::wavelength_sequence::{ONE_MINUS, WAVELENGTH_STREAM, kronecker, per_index_sample};
 
 /// Stream index of the per-iteration numbers of the merging algorithms (the shared set, or the
 /// groups' offsets and permutations).
@@ -310,9 +310,6 @@ impl<S: SpectralMode> WavelengthSource<S> {
         }
     }
 }
-
-/// The largest `f32` below 1 (a primary sample must stay in [0, 1)).
-const ONE_MINUS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 #[cfg(test)]
 mod tests {
