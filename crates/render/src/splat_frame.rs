@@ -42,49 +42,157 @@ pub fn sample_positions(camera: &Camera, seed: u64, iteration: u64) -> Vec<Vec2>
         .collect()
 }
 
+/// Filter taps per axis that [`spread`] precomputes for each camera sample: offsets up to this
+/// many pixels between the sample's pixel and a pixel it reaches (filter radii below 3.5
+/// pixels; wider filters evaluate the filter per pair instead).
+const MAX_REACH: usize = 3;
+
+/// Taps per axis: offsets `−MAX_REACH..=MAX_REACH`.
+const TAPS: usize = 2 * MAX_REACH + 1;
+
+/// Output rows per band of [`spread`]: the taps of a band's source rows are held at once, so
+/// the extra memory is `(BAND_ROWS + 2·reach) × width × 56` bytes whatever the image height.
+const BAND_ROWS: usize = 64;
+
+/// The 1D filter profiles of one camera sample at `p` (in pixel `(sx, sy)`) towards the pixel
+/// centres around it: `x[k] = f₁(p.x − c)` for the column `sx + k − reach` (centre `c`), `y[k]`
+/// likewise for the rows. The same products as evaluating `f₁(p.x − cx) f₁(p.y − cy)` per pair.
+#[derive(Clone, Copy)]
+struct Taps {
+    x: [f32; TAPS],
+    y: [f32; TAPS],
+}
+
+/// Largest offset (pixels, per axis) between the pixel holding a sample and a pixel whose centre
+/// its filter reaches: a sample lies in its own pixel `[s, s + 1)`, so `|p − c| < radius` needs
+/// `|s − x| < radius + ½`.
+fn reach_of(radius: f32) -> usize {
+    ((radius + 0.5).ceil() as usize).saturating_sub(1)
+}
+
 /// Replaces `values` (`stride` values per pixel, row-major, the camera samples' own values) by
 /// their splatted image: value `c` of pixel `j` becomes `Σ_i w_j(x_i) values[i·stride + c]`
 /// with `w_j` = [`Camera::splat_weight`] and `x_i` = `positions[i]`. Non-finite values count as
-/// black. Parallel over rows; each pixel sums its neighbours in row-major order.
+/// black. Parallel over rows; each pixel sums its neighbours in row-major order, so the result
+/// does not depend on the thread count. Filters of radius below 3.5 pixels take their 1D
+/// profiles from per-sample [`Taps`] computed once per band of rows (2·(2·reach + 1) profile
+/// evaluations per sample instead of two per (sample, pixel) pair; bit-identical).
 pub fn spread(camera: &Camera, positions: &[Vec2], values: &mut Vec<Rgb>, stride: usize) {
+    spread_with(camera, positions, values, stride, MAX_REACH);
+}
+
+/// [`spread`] with taps for reaches up to `max_reach` (at most [`MAX_REACH`]; the tests compare
+/// both paths with 0).
+fn spread_with(camera: &Camera, positions: &[Vec2], values: &mut Vec<Rgb>, stride: usize, max_reach: usize) {
     let (width, height) = (camera.width as usize, camera.height as usize);
     assert_eq!(positions.len(), width * height, "one raster position per pixel");
     assert_eq!(values.len(), width * height * stride, "stride values per pixel");
     if stride == 0 {
         return;
     }
-    // Samples lie in their own pixel: only pixels within radius + 1 can reach a pixel centre.
-    let reach = camera.filter.radius().ceil() as usize + 1;
+    let filter = &camera.filter;
+    let reach = reach_of(filter.radius());
     let source = std::mem::take(values);
     let mut out = vec![Rgb::BLACK; source.len()];
-    out.par_chunks_mut(width * stride).enumerate().for_each(|(y, row)| {
-        let cy = y as f32 + 0.5;
-        let rows = y.saturating_sub(reach)..(y + reach + 1).min(height);
-        let mut sum = vec![Rgb::BLACK; stride];
-        for (x, pixel) in row.chunks_mut(stride).enumerate() {
-            let cx = x as f32 + 0.5;
-            sum.fill(Rgb::BLACK);
-            for sy in rows.clone() {
-                for sx in x.saturating_sub(reach)..(x + reach + 1).min(width) {
-                    let i = sy * width + sx;
-                    let p = positions[i];
-                    let f = camera.filter.profile_1d(p.x - cx) * camera.filter.profile_1d(p.y - cy);
-                    if f == 0.0 {
-                        continue;
-                    }
-                    for (s, v) in sum.iter_mut().zip(&source[i * stride..(i + 1) * stride]) {
-                        if v.is_finite() {
-                            *s += *v * f;
+    // N_j per axis (the product is Camera::splat_normalization).
+    let nx: Vec<f64> = (0..width).map(|x| filter.clipped_integral_1d(x as f32 + 0.5, width as f32)).collect();
+    let ny: Vec<f64> = (0..height).map(|y| filter.clipped_integral_1d(y as f32 + 0.5, height as f32)).collect();
+    let columns = |x: usize| x.saturating_sub(reach)..(x + reach + 1).min(width);
+    let rows = |y: usize| y.saturating_sub(reach)..(y + reach + 1).min(height);
+    let accumulate = |sum: &mut [Rgb], i: usize, f: f32| {
+        for (s, v) in sum.iter_mut().zip(&source[i * stride..(i + 1) * stride]) {
+            if v.is_finite() {
+                *s += *v * f;
+            }
+        }
+    };
+    let finish = |pixel: &mut [Rgb], sum: &[Rgb], x: usize, y: usize| {
+        let scale = 1.0 / ((nx[x] * ny[y]) as f32);
+        for (out, s) in pixel.iter_mut().zip(sum) {
+            *out = *s * scale;
+        }
+    };
+    if reach > max_reach.min(MAX_REACH) {
+        out.par_chunks_mut(width * stride).enumerate().for_each(|(y, row)| {
+            let cy = y as f32 + 0.5;
+            let mut sum = vec![Rgb::BLACK; stride];
+            for (x, pixel) in row.chunks_mut(stride).enumerate() {
+                let cx = x as f32 + 0.5;
+                sum.fill(Rgb::BLACK);
+                for sy in rows(y) {
+                    for sx in columns(x) {
+                        let i = sy * width + sx;
+                        let p = positions[i];
+                        let f = filter.profile_1d(p.x - cx) * filter.profile_1d(p.y - cy);
+                        if f != 0.0 {
+                            accumulate(&mut sum, i, f);
                         }
                     }
                 }
+                finish(pixel, &sum, x, y);
             }
-            let scale = 1.0 / camera.splat_normalization(x as u32, y as u32);
-            for (out, s) in pixel.iter_mut().zip(&sum) {
-                *out = *s * scale;
-            }
+        });
+        *values = out;
+        return;
+    }
+    let taps_of = |i: usize| {
+        let (p, sx, sy) = (positions[i], i % width, i / width);
+        let mut taps = Taps { x: [0.0; TAPS], y: [0.0; TAPS] };
+        for k in 0..=2 * reach {
+            // Pixel centres sx + k − reach and sy + k − reach (outside the image: never read).
+            let cx = (sx + k) as f32 - reach as f32 + 0.5;
+            let cy = (sy + k) as f32 - reach as f32 + 0.5;
+            taps.x[k] = filter.profile_1d(p.x - cx);
+            taps.y[k] = filter.profile_1d(p.y - cy);
         }
-    });
+        taps
+    };
+    let mut taps = Vec::new();
+    for (band, band_out) in out.chunks_mut(BAND_ROWS * width * stride).enumerate() {
+        let first = band * BAND_ROWS;
+        let last = (first + BAND_ROWS).min(height);
+        let (lo, hi) = (first.saturating_sub(reach), (last + reach).min(height));
+        (lo * width..hi * width).into_par_iter().map(taps_of).collect_into_vec(&mut taps);
+        band_out.par_chunks_mut(width * stride).enumerate().for_each(|(row_in_band, row)| {
+            let y = first + row_in_band;
+            if stride == 1 {
+                // The frame alone (the common case): one running sum, no slices.
+                for (x, pixel) in row.iter_mut().enumerate() {
+                    let mut sum = Rgb::BLACK;
+                    for sy in rows(y) {
+                        let ty = y + reach - sy;
+                        for sx in columns(x) {
+                            let i = sy * width + sx;
+                            let t = &taps[i - lo * width];
+                            let f = t.x[x + reach - sx] * t.y[ty];
+                            let v = source[i];
+                            if f != 0.0 && v.is_finite() {
+                                sum += v * f;
+                            }
+                        }
+                    }
+                    finish(std::slice::from_mut(pixel), &[sum], x, y);
+                }
+                return;
+            }
+            let mut sum = vec![Rgb::BLACK; stride];
+            for (x, pixel) in row.chunks_mut(stride).enumerate() {
+                sum.fill(Rgb::BLACK);
+                for sy in rows(y) {
+                    let ty = y + reach - sy;
+                    for sx in columns(x) {
+                        let i = sy * width + sx;
+                        let t = &taps[i - lo * width];
+                        let f = t.x[x + reach - sx] * t.y[ty];
+                        if f != 0.0 {
+                            accumulate(&mut sum, i, f);
+                        }
+                    }
+                }
+                finish(pixel, &sum, x, y);
+            }
+        });
+    }
     *values = out;
 }
 
@@ -116,5 +224,47 @@ pub fn spread_camera_pass(
     if let Some(techniques) = techniques {
         let stride = techniques.layout.len();
         spread(camera, &positions, &mut techniques.values, stride);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use math::Vec3;
+    use scene::filter::Filter;
+
+    /// The tap path gives the same bits as evaluating the filter per (sample, pixel) pair, over
+    /// several bands, at the borders, with non-finite values and with several values per pixel.
+    #[test]
+    fn taps_match_the_direct_evaluation_bit_for_bit() {
+        let filters = [
+            Filter::from_desc(&scene::desc::FilterDesc::Gaussian { stddev: 0.5, radius: 2.0 }).unwrap(),
+            Filter::Tent { radius: 1.5 },
+            Filter::Tent { radius: 1.0 },
+            Filter::from_desc(&scene::desc::FilterDesc::Gaussian { stddev: 1.0, radius: 3.4 }).unwrap(),
+        ];
+        let (width, height) = (37u32, 2 * BAND_ROWS as u32 + 11);
+        for filter in filters {
+            let mut camera = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, width, height).with_filter(filter);
+            camera.film = FilmMode::Splat;
+            let mut rng = Rng::for_stream(5, 0, 0);
+            let positions: Vec<Vec2> = (0..camera.pixel_count())
+                .map(|i| {
+                    let u = rng.uniform2();
+                    Vec2::new((i % width as usize) as f32 + u[0], (i / width as usize) as f32 + u[1])
+                })
+                .collect();
+            for stride in [1, 3] {
+                let mut values: Vec<Rgb> = (0..camera.pixel_count() * stride)
+                    .map(|i| if i % 97 == 5 { Rgb::splat(f32::NAN) } else { Rgb::new(rng.uniform(), 1.0, i as f32) })
+                    .collect();
+                let mut direct = values.clone();
+                spread_with(&camera, &positions, &mut values, stride, MAX_REACH);
+                spread_with(&camera, &positions, &mut direct, stride, 0);
+                let bits = |v: &[Rgb]| v.iter().flat_map(|c| [c.r, c.g, c.b]).map(f32::to_bits).collect::<Vec<_>>();
+                assert_eq!(bits(&values), bits(&direct), "{filter:?}, stride {stride}");
+                assert!(values.iter().all(|v| v.is_finite()));
+            }
+        }
     }
 }
