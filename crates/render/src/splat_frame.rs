@@ -156,22 +156,27 @@ fn spread_with(camera: &Camera, positions: &[Vec2], values: &mut Vec<Rgb>, strid
         band_out.par_chunks_mut(width * stride).enumerate().for_each(|(row_in_band, row)| {
             let y = first + row_in_band;
             if stride == 1 {
-                // The frame alone (the common case): one running sum, no slices.
-                for (x, pixel) in row.iter_mut().enumerate() {
-                    let mut sum = Rgb::BLACK;
-                    for sy in rows(y) {
-                        let ty = y + reach - sy;
-                        for sx in columns(x) {
-                            let i = sy * width + sx;
-                            let t = &taps[i - lo * width];
-                            let f = t.x[x + reach - sx] * t.y[ty];
-                            let v = source[i];
-                            if f != 0.0 && v.is_finite() {
-                                sum += v * f;
-                            }
+                // The frame alone (the common case): each source of the rows in reach scatters
+                // into a padded row of sums (index x + MAX_REACH). Every pixel still receives
+                // its neighbours in row-major order, and adding the zero products of filter
+                // zeros and non-finite (blackened) sources leaves a sum that starts at +0
+                // unchanged, so the bits are those of the gather.
+                let mut sums = vec![Rgb::BLACK; width + 2 * MAX_REACH];
+                for sy in rows(y) {
+                    let ty = y + reach - sy;
+                    let row_taps = &taps[(sy - lo) * width..(sy - lo + 1) * width];
+                    let row_values = &source[sy * width..(sy + 1) * width];
+                    for (sx, (t, v)) in row_taps.iter().zip(row_values).enumerate() {
+                        let v = if v.is_finite() { *v } else { Rgb::BLACK };
+                        let fy = t.y[ty];
+                        let targets = &mut sums[sx + MAX_REACH - reach..][..2 * reach + 1];
+                        for (sum, fx) in targets.iter_mut().zip(&t.x) {
+                            *sum += v * (fx * fy);
                         }
                     }
-                    finish(std::slice::from_mut(pixel), &[sum], x, y);
+                }
+                for (x, (pixel, sum)) in row.iter_mut().zip(&sums[MAX_REACH..]).enumerate() {
+                    finish(std::slice::from_mut(pixel), std::slice::from_ref(sum), x, y);
                 }
                 return;
             }
@@ -234,7 +239,8 @@ mod tests {
     use scene::filter::Filter;
 
     /// The tap path gives the same bits as evaluating the filter per (sample, pixel) pair, over
-    /// several bands, at the borders, with non-finite values and with several values per pixel.
+    /// several bands, at the borders, with non-finite, negative and negative-zero values and with
+    /// several values per pixel.
     #[test]
     fn taps_match_the_direct_evaluation_bit_for_bit() {
         let filters = [
@@ -256,7 +262,13 @@ mod tests {
                 .collect();
             for stride in [1, 3] {
                 let mut values: Vec<Rgb> = (0..camera.pixel_count() * stride)
-                    .map(|i| if i % 97 == 5 { Rgb::splat(f32::NAN) } else { Rgb::new(rng.uniform(), 1.0, i as f32) })
+                    .map(|i| {
+                        if i % 97 == 5 {
+                            Rgb::splat(f32::NAN)
+                        } else {
+                            Rgb::new(rng.uniform() - 0.5, if i % 5 == 0 { -0.0 } else { 1.0 }, i as f32)
+                        }
+                    })
                     .collect();
                 let mut direct = values.clone();
                 spread_with(&camera, &positions, &mut values, stride, MAX_REACH);
