@@ -226,6 +226,24 @@ impl Parts {
                     Some(name) => Some(find_attribute(mesh, name).map_err(|e| format!("shape '{}': {e}", shape.name))?),
                     None => None,
                 };
+                // A constant emitter on two triangles that tile a parallelogram (Mitsuba's
+                // `rectangle`) is one light: its points are sampled on the whole parallelogram,
+                // so light selection has one light fewer to choose from.
+                let parallelogram = match (emission, texture, &emission_mask) {
+                    (Some(radiance), None, None) if mesh.triangles.len() == 2 => {
+                        let pair: Vec<Option<Triangle>> = mesh_triangles(mesh, None).map(|(t, _)| t).collect();
+                        pair[0]
+                            .zip(pair[1])
+                            .and_then(|(a, b)| AreaLight::parallelogram_of(&a, &b))
+                            .and_then(|(origin, u, v, n)| AreaLight::parallelogram(origin, u, v, n, radiance).ok())
+                    }
+                    _ => None,
+                };
+                let parallelogram = parallelogram.map(|light| {
+                    self.lights.push(Light::Area(light));
+                    self.light_spectra.push(spectrum.clone());
+                    self.lights.len() as u32 - 1
+                });
                 for (triangle, extra) in mesh_triangles(mesh, attribute) {
                     let Some(triangle) = triangle else {
                         self.report.degenerate_triangles += 1;
@@ -251,6 +269,7 @@ impl Parts {
                                 self.light_spectra.push(None);
                                 self.lights.len() as u32 - 1
                             }),
+                            None if parallelogram.is_some() => parallelogram,
                             None => emission.map(|radiance| {
                                 self.lights.push(Light::Area(AreaLight::new(triangle, radiance)));
                                 self.light_spectra.push(spectrum.clone());
@@ -514,6 +533,45 @@ mod tests {
         );
         // Equal areas: equal power, equal selection probability.
         assert!((scene.light_pick_probability(0) - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_rectangle_emits_as_one_parallelogram_light() {
+        // Mitsuba's rectangle: corners (±1, ±1, 0), triangles (0, 1, 2) and (2, 3, 0), facing +z.
+        let positions =
+            vec![Vec3::new(-1., -1., 0.), Vec3::new(1., -1., 0.), Vec3::new(1., 1., 0.), Vec3::new(-1., 1., 0.)];
+        let quad = |triangles: Vec<[u32; 3]>, positions: Vec<Vec3>| ShapeDesc {
+            name: "quad".into(),
+            geometry: Geometry::Mesh(MeshData {
+                positions,
+                normals: Vec::new(),
+                uvs: Vec::new(),
+                triangles,
+                attributes: Vec::new(),
+            }),
+            material: 0,
+            emission: Some(Rgb::splat(2.0)),
+            alpha: None,
+        };
+        let shapes = vec![quad(vec![[0, 1, 2], [2, 3, 0]], positions.clone())];
+        let (scene, report) = Scene::from_description(&description(vec![diffuse()], shapes), None).unwrap();
+        assert_eq!((report.triangles, report.lights), (2, 1));
+        let Light::Area(light) = &scene.lights[0] else { panic!("an area light") };
+        assert!((light.area() - 4.0).abs() < 1e-5 && light.triangle().is_none());
+        // Both triangles are that light.
+        for x in [-0.5, 0.5] {
+            let ray = math::Ray::new(Vec3::new(x, 0.4 * x, 1.0), -Vec3::Z);
+            let hit = scene.intersect(&ray).unwrap();
+            assert_eq!(hit.light, Some(0));
+            let seen = scene.lights[0].radiance_on_hit(ray.direction, hit.position, hit.normal, &scene.bounding_sphere);
+            assert!((seen.unwrap().direct_pdf.0 - 0.25).abs() < 1e-6, "1/area of the whole rectangle");
+        }
+        // A kite (the fourth corner moved) keeps one light per triangle.
+        let mut kite = positions;
+        kite[3] = Vec3::new(-1.5, 1.2, 0.);
+        let shapes = vec![quad(vec![[0, 1, 2], [2, 3, 0]], kite)];
+        let (_, report) = Scene::from_description(&description(vec![diffuse()], shapes), None).unwrap();
+        assert_eq!((report.triangles, report.lights), (2, 2));
     }
 
     #[test]

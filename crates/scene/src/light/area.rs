@@ -1,5 +1,6 @@
-//! Area lights: one-sided triangles, spheres and discs emitting constant radiance, their
-//! points sampled uniformly by area (direct and emission sampling share one area density).
+//! Area lights: one-sided triangles, parallelograms (a rectangle's two triangles as one light),
+//! spheres and discs emitting constant radiance, their points sampled uniformly by area (direct
+//! and emission sampling share one area density).
 
 use math::{Frame, PI, PdfA, PdfW, Vec3, warp};
 use spectrum::Rgb;
@@ -22,6 +23,18 @@ pub enum AreaShape {
         radius: f32,
         /// The normals (and the emission) point inward.
         flip_normals: bool,
+    },
+    /// The parallelogram `origin + a·edge_u + b·edge_v`, `a, b ∈ [0, 1]`: a mesh of two
+    /// triangles that tile it (Mitsuba's `rectangle`), emitting as one light.
+    Parallelogram {
+        /// A corner (scene units).
+        origin: Vec3,
+        /// First edge from `origin` (scene units).
+        edge_u: Vec3,
+        /// Second edge from `origin` (scene units).
+        edge_v: Vec3,
+        /// Unit front normal (that of the two triangles).
+        normal: Vec3,
     },
     /// The (possibly elliptic) disc `center + x·axis_u + y·axis_v`, `x² + y² ≤ 1`.
     Disc {
@@ -83,6 +96,57 @@ impl AreaLight {
         Ok(Self { shape: AreaShape::Disc { center, axis_u, axis_v, normal }, radiance, inv_area: 1.0 / area })
     }
 
+    /// An emitting parallelogram `origin + a·edge_u + b·edge_v` (`a, b ∈ [0, 1]`) with unit
+    /// front normal `normal` (± `normalize(edge_u × edge_v)`): see [`AreaLight::parallelogram_of`].
+    /// Fails for degenerate edges (zero area), a normal that is not unit and perpendicular to the
+    /// edges, or non-finite input.
+    pub fn parallelogram(
+        origin: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        normal: Vec3,
+        radiance: Rgb,
+    ) -> Result<Self, String> {
+        check_point("parallelogram origin", origin)?;
+        check_point("parallelogram edge_u", edge_u)?;
+        check_point("parallelogram edge_v", edge_v)?;
+        check_rgb("parallelogram emitter radiance", radiance)?;
+        let cross = edge_u.cross(edge_v);
+        let area = cross.length();
+        if !(area.is_finite() && area > 0.0) {
+            return Err(format!("parallelogram emitter: the edges {edge_u} and {edge_v} span no area"));
+        }
+        if !((normal.length() - 1.0).abs() < 1e-4 && (cross / area).dot(normal).abs() > 1.0 - 1e-4) {
+            return Err(format!("parallelogram emitter: {normal} is not the unit normal of its edges"));
+        }
+        Ok(Self { shape: AreaShape::Parallelogram { origin, edge_u, edge_v, normal }, radiance, inv_area: 1.0 / area })
+    }
+
+    /// The parallelogram that the two triangles `a` and `b` tile exactly (they share a
+    /// diagonal and face the same way, and the other two corners complete it), as
+    /// `(origin, edge_u, edge_v, normal)` with `a`'s normal; `None` otherwise. Corners may differ
+    /// by a relative 10⁻⁵ of the edge lengths (a transformed rectangle's rounding).
+    pub fn parallelogram_of(a: &Triangle, b: &Triangle) -> Option<(Vec3, Vec3, Vec3, Vec3)> {
+        if a.normal.dot(b.normal) < 1.0 - 1e-5 {
+            return None;
+        }
+        let (pa, pb) = (a.vertices(), b.vertices());
+        let scale = pa.iter().chain(&pb).map(|p| (*p - pa[0]).length()).fold(0.0f32, f32::max);
+        let tolerance = 1e-5 * scale;
+        let same = |p: Vec3, q: Vec3| (p - q).length() <= tolerance;
+        // The vertex of `a` that `b` lacks, and the one of `b` that `a` lacks.
+        let lone_a: Vec<Vec3> = pa.iter().copied().filter(|p| !pb.iter().any(|q| same(*p, *q))).collect();
+        let lone_b: Vec<Vec3> = pb.iter().copied().filter(|q| !pa.iter().any(|p| same(*p, *q))).collect();
+        let ([corner], [opposite]) = (lone_a.as_slice(), lone_b.as_slice()) else { return None };
+        let shared: Vec<Vec3> = pa.iter().copied().filter(|p| !same(*p, *corner)).collect();
+        let [s0, s1] = shared.as_slice() else { return None };
+        // A parallelogram: the diagonals bisect each other.
+        if !same(*corner + *opposite, *s0 + *s1) {
+            return None;
+        }
+        Some((*corner, *s0 - *corner, *s1 - *corner, a.normal))
+    }
+
     /// Surface area (square scene units).
     pub fn area(&self) -> f32 {
         1.0 / self.inv_area
@@ -106,6 +170,9 @@ impl AreaLight {
             AreaShape::Sphere { center, radius, flip_normals } => {
                 let d = warp::uniform_sphere(u);
                 (center + radius * d, if flip_normals { -d } else { d })
+            }
+            AreaShape::Parallelogram { origin, edge_u, edge_v, normal } => {
+                (origin + u[0] * edge_u + u[1] * edge_v, normal)
             }
             AreaShape::Disc { center, axis_u, axis_v, normal } => {
                 let q = warp::concentric_disc(u);
@@ -157,7 +224,7 @@ impl AreaLight {
     pub(super) fn radiance_on_hit(&self, ray_direction: Vec3, normal: Vec3) -> Option<HitRadiance> {
         let front = match self.shape {
             AreaShape::Triangle(t) => t.normal,
-            AreaShape::Disc { normal, .. } => normal,
+            AreaShape::Disc { normal, .. } | AreaShape::Parallelogram { normal, .. } => normal,
             AreaShape::Sphere { .. } => normal,
         };
         let cos_at_light = front.dot(-ray_direction);
@@ -176,7 +243,7 @@ impl AreaLight {
 impl AreaLight {
     /// Bounds for the light tree ([`LightBounds`]) from the light's [`super::Light::power`]
     /// `power` (W): strength `power/π = L·A` (one-sided Lambertian emission), the normal as
-    /// the cone axis for triangles and discs, every direction for spheres, and emission into
+    /// the cone axis for triangles, parallelograms and discs, every direction for spheres, and emission into
     /// the hemisphere (θ_e = π/2).
     pub(super) fn bounds(&self, power: f32) -> LightBounds {
         let phi = power / PI;
@@ -186,6 +253,17 @@ impl AreaLight {
             }
             AreaShape::Sphere { center, radius, .. } => {
                 LightBounds::omnidirectional(Aabb::new(center - Vec3::splat(radius), center + Vec3::splat(radius)), phi)
+            }
+            AreaShape::Parallelogram { origin, edge_u, edge_v, normal } => {
+                let corners = [origin, origin + edge_u, origin + edge_v, origin + edge_u + edge_v];
+                LightBounds {
+                    bounds: corners.iter().fold(Aabb::EMPTY, |b, p| b.grow(*p)),
+                    phi,
+                    axis: normal,
+                    cos_o: 1.0,
+                    cos_e: 0.0,
+                    two_sided: false,
+                }
             }
             AreaShape::Disc { center, axis_u, axis_v, normal } => {
                 let extent = Vec3::new(axis_u.x.hypot(axis_v.x), axis_u.y.hypot(axis_v.y), axis_u.z.hypot(axis_v.z));
