@@ -191,9 +191,9 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                 path.throughput * view(&path.slots, scene.emission::<S>(light_index, w, emitted.radiance)) * weight;
             out.record(Family::EmitterHit, 0, t, value.to_rgb(w));
         }
-        let Some(bsdf) =
-            Bsdf::new_at(scene.material(&hit), &hit.shading_point(), -direction, TransportMode::Radiance, hero)
-        else {
+        // Borrowed, not moved out of the `Option`: a move copies the several-hundred-byte BSDF.
+        let built = Bsdf::new_at(scene.material(&hit), &hit.shading_point(), -direction, TransportMode::Radiance, hero);
+        let Some(bsdf) = built.as_ref() else {
             break;
         };
         if path.path_length >= it.max_length {
@@ -202,7 +202,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
 
         let fluorescent = FluorescentVertex::at(scene.material(&hit), hit.uv);
         let end = CameraEnd {
-            scatterer: Scatterer::Surface(&bsdf),
+            scatterer: Scatterer::Surface(bsdf),
             position: hit.position,
             fluorescent: fluorescent.as_ref(),
             side,
@@ -248,7 +248,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             }
         }
         let Some(scattered) =
-            path.scatter(&bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true, presampled)
+            path.scatter(bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true, presampled)
         else {
             break;
         };
