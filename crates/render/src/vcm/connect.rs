@@ -384,3 +384,67 @@ pub fn connect_vertices<S: SpectralMode>(
     }
     camera.throughput * value
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vcm::light_vertex::VertexData;
+    use crate::vcm::mis::SubPathMis;
+    use scene::{Camera, Material, Texture};
+
+    /// Light vertex `i`: a checker-textured or a plain diffuse surface, its own uv and fixed
+    /// direction; every seventh one has its fixed direction in the surface (no BSDF).
+    fn vertex(i: u32) -> LightVertex {
+        let f = i as f32;
+        let normal = Vec3::Z;
+        let fixed = if i % 7 == 3 { Vec3::X } else { Vec3::new(0.05 * f - 0.5, 0.1, 1.0).normalize() };
+        LightVertex::new(&VertexData {
+            position: Vec3::new(f, 0.0, 0.0),
+            throughput: Rgb::splat(1.0),
+            mis: SubPathMis { d_vcm: 1.0, d_vc: 0.0, d_vm: 0.0, c_vc: 0.0, c_vm: 0.0 },
+            path_length: 1 + i,
+            material: i % 2,
+            normal,
+            shading_normal: normal,
+            uv: Vec2::new(0.013 + 0.097 * f, 0.5),
+            tangent: None,
+            attribute: None,
+            fixed,
+            continuation: 1.0,
+            terminated: false,
+        })
+    }
+
+    #[test]
+    fn cached_light_bsdfs_are_the_rebuilt_ones_bit_for_bit() {
+        let checker = Material::Diffuse {
+            reflectance: Texture::Checkerboard {
+                color0: Rgb::new(0.2, 0.3, 0.4),
+                color1: Rgb::new(0.8, 0.7, 0.6),
+                to_uv: scene::desc::UvTransform::IDENTITY,
+            },
+        };
+        let plain = Material::Diffuse { reflectance: Texture::Constant(Rgb::new(0.5, 0.25, 0.125)) };
+        let camera = Camera::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z, Vec3::Y, 40.0, 4, 4);
+        let scene = Scene::new("t", Vec::new(), vec![checker, plain], Vec::new(), camera);
+        // More vertices than are kept: the last ones take the rebuilt-every-time path.
+        let count = CACHED_LIGHT_BSDFS as u32 + 4;
+        let vertices: Vec<LightVertex> = (0..count).map(vertex).collect();
+        let generated = Vec3::new(0.3, -0.2, 0.9).normalize();
+        let rebuilt = |v: &LightVertex| v.bsdf(&scene, None).map(|b| b.evaluate(generated));
+        let fresh: Vec<_> = vertices.iter().map(rebuilt).collect();
+        // The check can tell vertices apart: no two neighbours evaluate alike, some have no BSDF.
+        assert!(fresh.windows(2).all(|w| w[0] != w[1]));
+        assert!(fresh.iter().any(Option::is_none) && fresh.iter().filter(|e| e.is_some()).count() > 10);
+        let mut cache = LightBsdfs::new(None);
+        // Asked in path order per camera vertex (possibly stopping early), as the camera pass does.
+        for stop in [count as usize, 5, count as usize, 2, count as usize] {
+            for (index, v) in vertices.iter().enumerate().take(stop) {
+                let cached = cache.get(&scene, index, v).map(|b| b.evaluate(generated));
+                assert_eq!(cached, fresh[index], "vertex {index}");
+                let bits = |e: &Option<Option<scene::BsdfEval>>| format!("{e:?}");
+                assert_eq!(bits(&cached), bits(&fresh[index]));
+            }
+        }
+    }
+}
