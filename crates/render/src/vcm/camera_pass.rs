@@ -8,7 +8,7 @@ use scene::camera::PrimaryDensity;
 use scene::{Bsdf, Scene, TransportMode};
 use spectrum::SpectralMode;
 
-use super::connect::{CameraEnd, connect_vertices, next_event};
+use super::connect::{CameraEnd, LightBsdfs, connect_vertices, next_event};
 use super::light_vertex::LightPath;
 use super::medium::{Arrival, Flight, MediumSide, Scatterer, advance};
 use super::merge::{GroupThroughputs, MergeScope, MergeSource, MergeWeighting, merge};
@@ -114,6 +114,8 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         _ => &[],
     };
     let mut group_throughputs = (!group_sets.is_empty()).then(|| GroupThroughputs::new(group_sets, path.throughput));
+    // The light sub-path's BSDFs, built on first use and shared by all camera vertices.
+    let mut light_bsdfs = LightBsdfs::new(hero);
 
     loop {
         let arrival = if media_active {
@@ -124,7 +126,8 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         };
         if let Arrival::Medium { position, distance, medium } = arrival {
             let args = (position, distance, medium);
-            if !medium_vertex(scene, it, &mut path, args, rng, light_path, merge_source, k, radius, w, out) {
+            let lights = (light_path, &mut light_bsdfs);
+            if !medium_vertex(scene, it, &mut path, args, rng, lights, merge_source, k, radius, w, out) {
                 break;
             }
             continue;
@@ -188,9 +191,9 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                 path.throughput * view(&path.slots, scene.emission::<S>(light_index, w, emitted.radiance)) * weight;
             out.record(Family::EmitterHit, 0, t, value.to_rgb(w));
         }
-        let Some(bsdf) =
-            Bsdf::new_at(scene.material(&hit), &hit.shading_point(), -direction, TransportMode::Radiance, hero)
-        else {
+        // Borrowed, not moved out of the `Option`: a move copies the several-hundred-byte BSDF.
+        let built = Bsdf::new_at(scene.material(&hit), &hit.shading_point(), -direction, TransportMode::Radiance, hero);
+        let Some(bsdf) = built.as_ref() else {
             break;
         };
         if path.path_length >= it.max_length {
@@ -199,7 +202,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
 
         let fluorescent = FluorescentVertex::at(scene.material(&hit), hit.uv);
         let end = CameraEnd {
-            scatterer: Scatterer::Surface(&bsdf),
+            scatterer: Scatterer::Surface(bsdf),
             position: hit.position,
             fluorescent: fluorescent.as_ref(),
             side,
@@ -210,11 +213,11 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                 // Next-event estimation (s = 1).
                 out.record(Family::NextEvent, 1, t, next_event(scene, &path, &end, rng, k, w).to_rgb(w));
                 // Connections to the pixel's light sub-path (s, t > 1), stored in path order.
-                for light in light_path.iter() {
+                for (index, light) in light_path.iter().enumerate() {
                     if light.record.path_length() + 1 + path.path_length > it.max_length {
                         break;
                     }
-                    let value = connect_vertices(scene, &path, &end, light, k, w, rng);
+                    let value = connect_vertices(scene, &path, &end, (light, index), &mut light_bsdfs, k, w, rng);
                     out.record(Family::Connection, light.record.path_length() + 1, t, value.to_rgb(w));
                 }
             }
@@ -245,7 +248,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             }
         }
         let Some(scattered) =
-            path.scatter(&bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true, presampled)
+            path.scatter(bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true, presampled)
         else {
             break;
         };
@@ -258,7 +261,8 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
 }
 
 /// A camera sub-path's vertex in a medium (`args`: position, distance along the ray, medium
-/// index): next-event estimation, connections to the pixel's light sub-path and merges (medium
+/// index): next-event estimation, connections to the pixel's light sub-path (with its BSDFs
+/// kept for the camera sub-path) and merges (medium
 /// vertices merge with medium vertices), then phase sampling. Returns false when the walk ends.
 /// (Camera paths in media never merge across wavelength groups: the engine groups such
 /// scenes.)
@@ -269,7 +273,7 @@ fn medium_vertex<S: SpectralMode, R: Record>(
     path: &mut SubPath<S>,
     (position, distance, medium): (Vec3, f32, u32),
     rng: &mut Rng,
-    light_path: LightPath<S>,
+    (light_path, light_bsdfs): (LightPath<S>, &mut LightBsdfs),
     merge_source: Option<&MergeSource<S>>,
     k: &mis::MisConstants,
     radius: f32,
@@ -296,11 +300,11 @@ fn medium_vertex<S: SpectralMode, R: Record>(
     };
     if techniques.connect {
         out.record(Family::NextEvent, 1, t, next_event(scene, path, &end, rng, k, w).to_rgb(w));
-        for light in light_path.iter() {
+        for (index, light) in light_path.iter().enumerate() {
             if light.record.path_length() + 1 + path.path_length > it.max_length {
                 break;
             }
-            let value = connect_vertices(scene, path, &end, light, k, w, rng);
+            let value = connect_vertices(scene, path, &end, (light, index), light_bsdfs, k, w, rng);
             out.record(Family::Connection, light.record.path_length() + 1, t, value.to_rgb(w));
         }
     }

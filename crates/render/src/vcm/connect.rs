@@ -1,10 +1,11 @@
 //! Vertex connection techniques: a light vertex to the camera (t = 1), a camera vertex to a
 //! light (s = 1, next-event estimation), a camera vertex to a light vertex (s, t > 1), and the
-//! weight of an emitter hit by a camera path (s = 0).
+//! weight of an emitter hit by a camera path (s = 0); and [`LightBsdfs`], the light sub-path's
+//! BSDFs built once per camera sub-path.
 
 use math::{Rng, Vec2, Vec3};
-use scene::Scene;
 use scene::filter::FilmMode;
+use scene::{Bsdf, Scene};
 use spectrum::{Rgb, SpectralMode};
 
 use super::Iteration;
@@ -191,6 +192,52 @@ impl CameraEnd<'_> {
     }
 }
 
+/// Light vertices (the first ones in path order) whose BSDFs [`LightBsdfs`] keeps. A later
+/// vertex's BSDF is rebuilt at every connection; light sub-paths within the default maximum
+/// path length (10 segments) never have one.
+pub const CACHED_LIGHT_BSDFS: usize = 16;
+
+/// The BSDFs of one light sub-path's surface vertices, for one camera sub-path (one hero
+/// wavelength), each built the first time a connection needs it.
+///
+/// The camera pass connects every vertex of a camera sub-path to the vertices of the same light
+/// sub-path (SmallVCM's scheme), so without it a light vertex's BSDF would be rebuilt from its
+/// record once per camera vertex. Building a BSDF draws no random numbers and depends only on
+/// the vertex and the hero wavelength, so the kept value is bit for bit the one a rebuild gives.
+pub struct LightBsdfs {
+    /// The camera sub-path's hero wavelength (nm; `None` in RGB mode).
+    hero: Option<f32>,
+    /// Per vertex index (path order): `None` until built, then what [`LightVertex::bsdf`]
+    /// returned.
+    cached: [Option<Option<Bsdf>>; CACHED_LIGHT_BSDFS],
+    /// The last BSDF built for a vertex beyond [`CACHED_LIGHT_BSDFS`].
+    spare: Option<Bsdf>,
+}
+
+impl LightBsdfs {
+    /// An empty cache for a camera sub-path at hero wavelength `hero` (nm; `None` in RGB mode).
+    #[inline]
+    pub fn new(hero: Option<f32>) -> Self {
+        Self { hero, cached: [None; CACHED_LIGHT_BSDFS], spare: None }
+    }
+
+    /// The BSDF (importance transport) of `vertex`, the light sub-path's vertex of index
+    /// `index` in path order (0 nearest the light), as [`LightVertex::bsdf`] builds it: `None`
+    /// where its material cannot scatter for the vertex's fixed direction, and in a medium. The
+    /// caller passes the same vertex for an index throughout the cache's life.
+    #[inline]
+    pub fn get<S: SpectralMode>(&mut self, scene: &Scene, index: usize, vertex: &LightVertex<S>) -> Option<&Bsdf> {
+        let hero = self.hero;
+        match self.cached.get_mut(index) {
+            Some(slot) => slot.get_or_insert_with(|| vertex.bsdf(scene, hero)).as_ref(),
+            None => {
+                self.spare = vertex.bsdf(scene, hero);
+                self.spare.as_ref()
+            }
+        }
+    }
+}
+
 /// Next-event estimation from camera vertex `end` (s = 1), MIS-weighted (eqs. 44, 45).
 pub fn next_event<S: SpectralMode>(
     scene: &Scene,
@@ -250,15 +297,17 @@ pub fn next_event<S: SpectralMode>(
     camera.throughput * value
 }
 
-/// Connects camera vertex `end` to a light vertex (s, t > 1), MIS-weighted (eqs. 40, 41) with
-/// the camera path's constants `k` (the light vertex's dVC/dVM are rebuilt for them, eqs. 62,
-/// 63). Labels of fluorescent ends are drawn from `rng`.
+/// Connects camera vertex `end` to `light`, the light sub-path's vertex of index
+/// `light_index` in path order (s, t > 1), MIS-weighted (eqs. 40, 41) with the camera path's
+/// constants `k` (the light vertex's dVC/dVM are rebuilt for them, eqs. 62, 63). A surface
+/// vertex's BSDF comes from `light_bsdfs`. Labels of fluorescent ends are drawn from `rng`.
 #[allow(clippy::too_many_arguments)]
 pub fn connect_vertices<S: SpectralMode>(
     scene: &Scene,
     camera: &SubPath<S>,
     end: &CameraEnd,
-    light: &LightVertex<S>,
+    (light, light_index): (&LightVertex<S>, usize),
+    light_bsdfs: &mut LightBsdfs,
     k: &MisConstants,
     wavelengths: &S::Wavelengths,
     rng: &mut Rng,
@@ -269,14 +318,12 @@ pub fn connect_vertices<S: SpectralMode>(
     let distance = distance_squared.sqrt();
     let direction = to_light / distance;
     let Some(camera_eval) = scatterer.evaluate(direction) else { return S::default() };
-    let light_bsdf;
     let light_medium = light.medium().map(|m| scene.media.medium(m));
     let light_scatterer = match light_medium {
         Some(m) => Scatterer::Medium(m, light.record.fixed()),
         None => {
-            let Some(bsdf) = light.bsdf(scene, S::hero_wavelength(wavelengths)) else { return S::default() };
-            light_bsdf = bsdf;
-            Scatterer::Surface(&light_bsdf)
+            let Some(bsdf) = light_bsdfs.get(scene, light_index, light) else { return S::default() };
+            Scatterer::Surface(bsdf)
         }
     };
     let Some(light_eval) = light_scatterer.evaluate(-direction) else { return S::default() };
@@ -336,4 +383,68 @@ pub fn connect_vertices<S: SpectralMode>(
         return S::default();
     }
     camera.throughput * value
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vcm::light_vertex::VertexData;
+    use crate::vcm::mis::SubPathMis;
+    use scene::{Camera, Material, Texture};
+
+    /// Light vertex `i`: a checker-textured or a plain diffuse surface, its own uv and fixed
+    /// direction; every seventh one has its fixed direction in the surface (no BSDF).
+    fn vertex(i: u32) -> LightVertex {
+        let f = i as f32;
+        let normal = Vec3::Z;
+        let fixed = if i % 7 == 3 { Vec3::X } else { Vec3::new(0.05 * f - 0.5, 0.1, 1.0).normalize() };
+        LightVertex::new(&VertexData {
+            position: Vec3::new(f, 0.0, 0.0),
+            throughput: Rgb::splat(1.0),
+            mis: SubPathMis { d_vcm: 1.0, d_vc: 0.0, d_vm: 0.0, c_vc: 0.0, c_vm: 0.0 },
+            path_length: 1 + i,
+            material: i % 2,
+            normal,
+            shading_normal: normal,
+            uv: Vec2::new(0.013 + 0.097 * f, 0.5),
+            tangent: None,
+            attribute: None,
+            fixed,
+            continuation: 1.0,
+            terminated: false,
+        })
+    }
+
+    #[test]
+    fn cached_light_bsdfs_are_the_rebuilt_ones_bit_for_bit() {
+        let checker = Material::Diffuse {
+            reflectance: Texture::Checkerboard {
+                color0: Rgb::new(0.2, 0.3, 0.4),
+                color1: Rgb::new(0.8, 0.7, 0.6),
+                to_uv: scene::desc::UvTransform::IDENTITY,
+            },
+        };
+        let plain = Material::Diffuse { reflectance: Texture::Constant(Rgb::new(0.5, 0.25, 0.125)) };
+        let camera = Camera::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z, Vec3::Y, 40.0, 4, 4);
+        let scene = Scene::new("t", Vec::new(), vec![checker, plain], Vec::new(), camera);
+        // More vertices than are kept: the last ones take the rebuilt-every-time path.
+        let count = CACHED_LIGHT_BSDFS as u32 + 4;
+        let vertices: Vec<LightVertex> = (0..count).map(vertex).collect();
+        let generated = Vec3::new(0.3, -0.2, 0.9).normalize();
+        let rebuilt = |v: &LightVertex| v.bsdf(&scene, None).map(|b| b.evaluate(generated));
+        let fresh: Vec<_> = vertices.iter().map(rebuilt).collect();
+        // The check can tell vertices apart: no two neighbours evaluate alike, some have no BSDF.
+        assert!(fresh.windows(2).all(|w| w[0] != w[1]));
+        assert!(fresh.iter().any(Option::is_none) && fresh.iter().filter(|e| e.is_some()).count() > 10);
+        let mut cache = LightBsdfs::new(None);
+        // Asked in path order per camera vertex (possibly stopping early), as the camera pass does.
+        for stop in [count as usize, 5, count as usize, 2, count as usize] {
+            for (index, v) in vertices.iter().enumerate().take(stop) {
+                let cached = cache.get(&scene, index, v).map(|b| b.evaluate(generated));
+                assert_eq!(cached, fresh[index], "vertex {index}");
+                let bits = |e: &Option<Option<scene::BsdfEval>>| format!("{e:?}");
+                assert_eq!(bits(&cached), bits(&fresh[index]));
+            }
+        }
+    }
 }
