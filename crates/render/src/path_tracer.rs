@@ -297,9 +297,10 @@ fn radiance<S: SpectralMode>(
             break;
         }
 
-        let Some(bsdf) =
-            Bsdf::new_at(scene.material(&hit), &hit.shading_point(), -ray.direction, TransportMode::Radiance, hero)
-        else {
+        // Borrowed, not moved out of the `Option`: a move copies the several-hundred-byte BSDF.
+        let built =
+            Bsdf::new_at(scene.material(&hit), &hit.shading_point(), -ray.direction, TransportMode::Radiance, hero);
+        let Some(bsdf) = built.as_ref() else {
             break;
         };
         // The albedo rule's continuation probability, part of the BSDF pdf (1 otherwise).

@@ -209,9 +209,10 @@ pub(crate) fn radiance<S: SpectralMode>(
         // vertex) may continue.
         let at_limit = path_length >= max_length;
         let fixed_direction = -ray.direction;
-        let Some(bsdf) =
-            Bsdf::new_at(scene.material(&hit), &hit.shading_point(), fixed_direction, TransportMode::Radiance, hero)
-        else {
+        // Borrowed, not moved out of the `Option`: a move copies the several-hundred-byte BSDF.
+        let built =
+            Bsdf::new_at(scene.material(&hit), &hit.shading_point(), fixed_direction, TransportMode::Radiance, hero);
+        let Some(bsdf) = built.as_ref() else {
             break;
         };
         if at_limit && !bsdf.is_delta() {

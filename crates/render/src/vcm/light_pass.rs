@@ -104,9 +104,9 @@ pub fn trace_light_path<S: SpectralMode>(
             }
         }
         let fixed = -path.ray.direction;
-        let Some(bsdf) =
-            Bsdf::new_at(scene.material(&hit), &hit.shading_point(), fixed, TransportMode::Importance, hero)
-        else {
+        // Borrowed, not moved out of the `Option`: a move copies the several-hundred-byte BSDF.
+        let built = Bsdf::new_at(scene.material(&hit), &hit.shading_point(), fixed, TransportMode::Importance, hero);
+        let Some(bsdf) = built.as_ref() else {
             break;
         };
         let distance_squared = path.arrival_distance_squared(hit.distance);
@@ -137,7 +137,7 @@ pub fn trace_light_path<S: SpectralMode>(
             }
             if techniques.connect_to_camera() && path.path_length < it.max_length {
                 let endpoint = LightEnd {
-                    scatterer: Scatterer::Surface(&bsdf),
+                    scatterer: Scatterer::Surface(bsdf),
                     position: hit.position,
                     fluorescent: fluorescent.as_ref(),
                     side,
@@ -159,7 +159,7 @@ pub fn trace_light_path<S: SpectralMode>(
             break;
         }
         if path
-            .scatter(&bsdf, hit.position, rng, false, k, wavelengths, fluorescent.as_ref(), false, presampled)
+            .scatter(bsdf, hit.position, rng, false, k, wavelengths, fluorescent.as_ref(), false, presampled)
             .is_none()
         {
             break;
