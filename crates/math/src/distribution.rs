@@ -3,6 +3,9 @@
 
 use glam::Vec2;
 
+mod guide;
+use guide::Guide;
+
 /// The largest `f32` below 1: continuous samples stay in `[0, 1)`.
 const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
@@ -11,6 +14,8 @@ const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 pub struct Distribution1D {
     cdf: Vec<f32>,
     total: f32,
+    /// Narrows the inversion of `cdf` to a few entries (one on average).
+    guide: Guide,
 }
 
 impl Distribution1D {
@@ -29,7 +34,9 @@ impl Distribution1D {
         if sum <= 0.0 {
             return None;
         }
-        Some(Self { cdf, total: sum as f32 })
+        let total = sum as f32;
+        let guide = Guide::new(&cdf, total);
+        Some(Self { cdf, total, guide })
     }
 
     /// Number of entries.
@@ -43,9 +50,12 @@ impl Distribution1D {
     }
 
     /// Picks an index for the uniform number `u ∈ [0,1)`; returns it with its probability.
+    /// The index is the first whose cumulative weight exceeds `u · total` (the last one if
+    /// none does).
+    #[inline]
     pub fn sample(&self, u: f32) -> (usize, f32) {
         let target = u * self.total;
-        let index = self.cdf.partition_point(|c| *c <= target).min(self.cdf.len() - 1);
+        let index = self.guide.partition_point(&self.cdf, target).min(self.cdf.len() - 1);
         (index, self.probability(index))
     }
 
