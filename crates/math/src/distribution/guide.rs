@@ -56,11 +56,12 @@ impl Guide {
 }
 
 /// The cell of `t`: `min(⌊t·scale⌋, cells − 1)`, 0 for negative or NaN products. Monotonic
-/// (never decreasing) in `t` for a fixed `scale ≥ 0`.
+/// (never decreasing) in `t` for a fixed `scale ≥ 0`. `cells` is at most `u32::MAX`.
 #[inline]
 fn cell_of(t: f32, scale: f32, cells: usize) -> usize {
-    // `as` saturates: negatives and NaN give 0, large values usize::MAX.
-    ((t * scale) as usize).min(cells - 1)
+    // `as` saturates: negatives and NaN give 0, large values u32::MAX (a cheaper conversion
+    // than to usize).
+    ((t * scale) as u32).min((cells - 1) as u32) as usize
 }
 
 #[cfg(test)]
