@@ -60,7 +60,6 @@ impl Distribution1D {
     /// Picks an index for the uniform number `u ∈ [0,1)`; returns it with its probability.
     /// The index is the first whose cumulative weight exceeds `u · total` (the last one if
     /// none does).
-    #[inline]
     pub fn sample(&self, u: f32) -> (usize, f32) {
         let target = u * self.total;
         let index = self.guide.partition_point(&self.cdf, target).min(self.cdf.len() - 1);
