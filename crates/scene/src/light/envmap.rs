@@ -26,19 +26,30 @@ pub struct EnvMapLight {
     data: Arc<EnvMapData>,
 }
 
+/// One pixel of the map and the sampling density of the lattice cell whose upper-left corner it
+/// is, side by side: [`EnvMapLight::evaluate`] reads the corner pixel anyway, so the density
+/// comes with it in the same cache line (16 bytes, aligned: a texel never straddles two).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(align(16))]
+struct Texel {
+    /// The pixel with the scale applied; negatives clamped to 0.
+    radiance: Rgb,
+    /// Density per unit area of the sampling square on the cell `(x, y)` of this pixel
+    /// ([`Distribution2D::cell_pdf`]); 0 on the last row, which starts no cell.
+    cell_pdf: f32,
+}
+
 #[derive(Debug, PartialEq)]
 struct EnvMapData {
     width: usize,
     height: usize,
-    /// Pixels with the scale applied, row-major, row 0 at the top; negatives clamped to 0.
-    pixels: Vec<Rgb>,
+    /// The `W × H` pixels row-major, row 0 at the top, each with its cell's density: the
+    /// lookup cell of a point is its sampling cell, so one read replaces recomputing the
+    /// density from the cumulative sums.
+    texels: Vec<Texel>,
     /// Rotation local → world (columns: images of the local axes).
     to_world: [Vec3; 3],
     distribution: Distribution2D,
-    /// The density per unit area of `distribution` on each of its `W × (H − 1)` cells,
-    /// row-major ([`Distribution2D::cell_pdfs`]): the lookup cell of a point is its sampling
-    /// cell, so one table read replaces recomputing the density from the cumulative sums.
-    cell_pdf: Vec<f32>,
     /// `½/W`: the offset between the map's `u` and the sampling square's `s`.
     half_texel: f32,
     /// `W` as `f32` (lattice columns per unit of `s`).
@@ -116,15 +127,19 @@ impl EnvMapLight {
         let distribution = Distribution2D::new(&weights, width, cells_y)
             .or_else(|| Distribution2D::new(&vec![1.0; width * cells_y], width, cells_y))
             .ok_or_else(|| "environment map: cannot build the sampling distribution".to_string())?;
-        let cell_pdf = distribution.cell_pdfs();
+        let cell_pdfs = distribution.cell_pdfs();
+        let texels = pixels
+            .iter()
+            .enumerate()
+            .map(|(i, radiance)| Texel { radiance: *radiance, cell_pdf: cell_pdfs.get(i).copied().unwrap_or(0.0) })
+            .collect();
         Ok(Self {
             data: Arc::new(EnvMapData {
                 width,
                 height,
-                pixels,
+                texels,
                 to_world,
                 distribution,
-                cell_pdf,
                 half_texel: 0.5 / width as f32,
                 width_f32: width as f32,
                 cells_y_f32: cells_y as f32,
@@ -150,7 +165,7 @@ impl EnvMapLight {
     /// The radiance is the bilinear interpolation at the sampling-square point `(s, t)`
     /// (lattice coordinates `s·W`, periodic, and `t·(H − 1)`); the lattice cell it interpolates
     /// in is the sampling cell of `(s, t)`, whose density `p` per unit area
-    /// ([`Distribution2D::pdf`]) is read from `cell_pdf`.
+    /// ([`Distribution2D::pdf`]) is stored with the cell's upper-left pixel.
     #[inline]
     fn evaluate(&self, direction: Vec3) -> (Rgb, f32) {
         let d = &*self.data;
@@ -166,14 +181,15 @@ impl EnvMapLight {
         let y = t * d.cells_y_f32;
         let j0 = (y.max(0.0) as usize).min(d.height - 2);
         let fy = (y - j0 as f32).clamp(0.0, 1.0);
-        let (top_row, bottom_row) = (&d.pixels[j0 * d.width..], &d.pixels[(j0 + 1) * d.width..]);
-        let top = top_row[i0] * (1.0 - fx) + top_row[i1] * fx;
-        let bottom = bottom_row[i0] * (1.0 - fx) + bottom_row[i1] * fx;
+        let (top_row, bottom_row) = (&d.texels[j0 * d.width..], &d.texels[(j0 + 1) * d.width..]);
+        let corner = top_row[i0];
+        let top = corner.radiance * (1.0 - fx) + top_row[i1].radiance * fx;
+        let bottom = bottom_row[i0].radiance * (1.0 - fx) + bottom_row[i1].radiance * fx;
         let radiance = top * (1.0 - fy) + bottom * fy;
         let pdf = if sin_theta > 0.0 {
             // Distribution2D::pdf: 0 outside the closed unit square (NaN included).
             let inside = (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t);
-            let pdf_area = if inside { d.cell_pdf[j0 * d.width + i0] } else { 0.0 };
+            let pdf_area = if inside { corner.cell_pdf } else { 0.0 };
             pdf_area / (2.0 * PI * PI * sin_theta)
         } else {
             0.0
@@ -318,7 +334,7 @@ mod tests {
         let y = t * (d.height - 1) as f32;
         let j0 = (y.max(0.0) as usize).min(d.height - 2);
         let fy = (y - j0 as f32).clamp(0.0, 1.0);
-        let px = |i: usize, j: usize| d.pixels[j * d.width + i];
+        let px = |i: usize, j: usize| d.texels[j * d.width + i].radiance;
         let top = px(i0, j0) * (1.0 - fx) + px(i1, j0) * fx;
         let bottom = px(i0, j0 + 1) * (1.0 - fx) + px(i1, j0 + 1) * fx;
         let radiance = top * (1.0 - fy) + bottom * fy;
