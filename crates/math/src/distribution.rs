@@ -3,6 +3,9 @@
 
 use glam::Vec2;
 
+mod guide;
+use guide::Guide;
+
 /// The largest `f32` below 1: continuous samples stay in `[0, 1)`.
 const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
@@ -11,13 +14,23 @@ const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 pub struct Distribution1D {
     cdf: Vec<f32>,
     total: f32,
+    /// Narrows the inversion of `cdf` to a few entries (one on average).
+    guide: Guide,
 }
 
 impl Distribution1D {
     /// Builds the distribution. Returns `None` when there are no weights, a weight is negative
     /// or not finite, or all are zero.
     pub fn new(weights: &[f32]) -> Option<Self> {
-        if weights.is_empty() || weights.iter().any(|w| !w.is_finite() || *w < 0.0) {
+        if weights.iter().any(|w| !w.is_finite() || *w < 0.0) {
+            return None;
+        }
+        Self::from_valid(weights)
+    }
+
+    /// [`Distribution1D::new`] for weights already known to be finite and non-negative.
+    fn from_valid(weights: &[f32]) -> Option<Self> {
+        if weights.is_empty() {
             return None;
         }
         let mut cdf = Vec::with_capacity(weights.len());
@@ -29,7 +42,9 @@ impl Distribution1D {
         if sum <= 0.0 {
             return None;
         }
-        Some(Self { cdf, total: sum as f32 })
+        let total = sum as f32;
+        let guide = Guide::new(&cdf, total);
+        Some(Self { cdf, total, guide })
     }
 
     /// Number of entries.
@@ -43,13 +58,16 @@ impl Distribution1D {
     }
 
     /// Picks an index for the uniform number `u ∈ [0,1)`; returns it with its probability.
+    /// The index is the first whose cumulative weight exceeds `u · total` (the last one if
+    /// none does).
     pub fn sample(&self, u: f32) -> (usize, f32) {
         let target = u * self.total;
-        let index = self.cdf.partition_point(|c| *c <= target).min(self.cdf.len() - 1);
+        let index = self.guide.partition_point(&self.cdf, target).min(self.cdf.len() - 1);
         (index, self.probability(index))
     }
 
     /// Probability of index `i`.
+    #[inline]
     pub fn probability(&self, i: usize) -> f32 {
         let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
         (self.cdf[i] - lo) / self.total
@@ -64,12 +82,14 @@ impl Distribution1D {
     /// weights: returns the point `x ∈ [0, 1)` and its density per unit length,
     /// `n · probability(bin)`. The point is `u` remapped within its bin, so the map is monotonic,
     /// and `x` always lies in the bin whose probability is reported.
+    #[inline]
     pub fn sample_continuous(&self, u: f32) -> (f32, f32) {
         let (x, pdf, _) = self.sample_continuous_bin(u);
         (x, pdf)
     }
 
     /// [`Distribution1D::sample_continuous`] that also returns the bin.
+    #[inline]
     fn sample_continuous_bin(&self, u: f32) -> (f32, f32, usize) {
         let (index, probability) = self.sample(u);
         let lo = if index == 0 { 0.0 } else { self.cdf[index - 1] };
@@ -88,13 +108,20 @@ impl Distribution1D {
         (x, probability * n as f32, index)
     }
 
+    /// Density per unit length of [`Distribution1D::sample_continuous`] on bin `i`:
+    /// `n · probability(i)`.
+    #[inline]
+    fn bin_density(&self, i: usize) -> f32 {
+        self.probability(i) * self.len() as f32
+    }
+
     /// Density per unit length of [`Distribution1D::sample_continuous`] at `x ∈ [0, 1]`
     /// (0 outside).
     pub fn pdf_continuous(&self, x: f32) -> f32 {
         if !(0.0..=1.0).contains(&x) {
             return 0.0;
         }
-        self.probability(bin_of(x, self.len())) * self.len() as f32
+        self.bin_density(bin_of(x, self.len()))
     }
 }
 
@@ -131,7 +158,7 @@ impl Distribution2D {
             row_sums.push(sum as f32);
             // A row without weight is never chosen; give it a uniform conditional so that every
             // row has one.
-            conditional.push(match Distribution1D::new(row) {
+            conditional.push(match Distribution1D::from_valid(row) {
                 Some(d) => d,
                 None => Distribution1D::new(&vec![1.0; width])?,
             });
@@ -157,6 +184,7 @@ impl Distribution2D {
 
     /// Samples a point of `[0, 1)²` with two uniform numbers (`u[1]` picks the row, `u[0]` the
     /// position within it); returns the point and its density per unit area of the square.
+    #[inline]
     pub fn sample(&self, u: [f32; 2]) -> (Vec2, f32) {
         let (y, pdf_y, row) = self.marginal.sample_continuous_bin(u[1]);
         let (x, pdf_x) = self.conditional[row].sample_continuous(u[0]);
@@ -168,8 +196,30 @@ impl Distribution2D {
         if !(0.0..=1.0).contains(&p.x) || !(0.0..=1.0).contains(&p.y) {
             return 0.0;
         }
-        let row = bin_of(p.y, self.height());
-        self.marginal.pdf_continuous(p.y) * self.conditional[row].pdf_continuous(p.x)
+        self.cell_pdf(bin_of(p.x, self.width()), bin_of(p.y, self.height()))
+    }
+
+    /// [`Distribution2D::cell_pdf`] of every cell, row-major (row `y`, column `x` at
+    /// `y·width + x`): densities per unit area.
+    pub fn cell_pdfs(&self) -> Vec<f32> {
+        let mut pdfs = Vec::with_capacity(self.width() * self.height());
+        for (y, row) in self.conditional.iter().enumerate() {
+            // The same product as `cell_pdf`, with the row's factor computed once.
+            let row_density = self.marginal.bin_density(y);
+            pdfs.extend((0..row.len()).map(|x| row_density * row.bin_density(x)));
+        }
+        pdfs
+    }
+
+    /// Density per unit area of [`Distribution2D::sample`] on the cell in column `x` and row
+    /// `y` (the value [`Distribution2D::pdf`] reports at every point of that cell); 0 outside
+    /// the grid.
+    #[inline]
+    pub fn cell_pdf(&self, x: usize, y: usize) -> f32 {
+        match self.conditional.get(y) {
+            Some(row) if x < row.len() => self.marginal.bin_density(y) * row.bin_density(x),
+            _ => 0.0,
+        }
     }
 }
 
@@ -188,6 +238,30 @@ mod tests {
         assert_eq!(d.probability(1), 0.0);
         assert!(Distribution1D::new(&[0.0]).is_none());
         assert!(Distribution1D::new(&[f32::NAN]).is_none());
+    }
+
+    #[test]
+    fn guided_sampling_picks_the_bin_of_a_full_search() {
+        let mut rng = crate::Rng::new(1, 2);
+        let random: Vec<f32> = (0..777).map(|i| if i % 5 < 2 { 0.0 } else { rng.uniform() * 10.0 }).collect();
+        let tables: [&[f32]; 6] =
+            [&[1.0], &[0.0, 0.0, 5.0], &[5.0, 0.0, 0.0], &[1.0, 0.0, 0.0, 0.0, 2.0], &[1e-30, 1e30, 1e-30], &random];
+        for weights in tables {
+            let d = Distribution1D::new(weights).unwrap();
+            let mut us = vec![0.0, ONE_MINUS_EPSILON, 1.0, -0.0];
+            us.extend((0..=10_000).map(|i| i as f32 / 10_000.0));
+            us.extend(d.cdf.iter().flat_map(|c| {
+                let u = c / d.total;
+                [u, f32::from_bits(u.to_bits().saturating_sub(1)), f32::from_bits(u.to_bits() + 1)]
+            }));
+            for u in us {
+                let target = u * d.total;
+                let index = d.cdf.partition_point(|c| *c <= target).min(d.len() - 1);
+                let (guided, probability) = d.sample(u);
+                assert_eq!(guided, index, "u = {u}, weights {weights:?}");
+                assert_eq!(probability.to_bits(), d.probability(index).to_bits());
+            }
+        }
     }
 
     #[test]
@@ -251,6 +325,30 @@ mod tests {
             / 20.0;
         assert!((integral - 1.0).abs() < 1e-5);
         assert_eq!(d.pdf(Vec2::new(1.5, 0.5)), 0.0);
+    }
+
+    #[test]
+    fn cell_pdf_is_the_density_at_every_point_of_its_cell() {
+        let (w, h) = (5, 4);
+        let d = Distribution2D::new(&WEIGHTS, w, h).unwrap();
+        for y in 0..h {
+            for x in 0..w {
+                // The product of the two 1D densities, computed as `pdf` did before `cell_pdf`.
+                let expected = (d.marginal.probability(y) * h as f32) * (d.conditional[y].probability(x) * w as f32);
+                assert_eq!(d.cell_pdf(x, y).to_bits(), expected.to_bits(), "cell ({x}, {y})");
+                for (fx, fy) in [(0.0, 0.0), (0.5, 0.5), (0.999, 0.001)] {
+                    let p = Vec2::new((x as f32 + fx) / w as f32, (y as f32 + fy) / h as f32);
+                    assert_eq!(d.pdf(p).to_bits(), expected.to_bits(), "{p}");
+                }
+            }
+        }
+        let all = d.cell_pdfs();
+        assert_eq!(all.len(), w * h);
+        for (i, pdf) in all.iter().enumerate() {
+            assert_eq!(pdf.to_bits(), d.cell_pdf(i % w, i / w).to_bits());
+        }
+        assert_eq!(d.cell_pdf(w, 0), 0.0);
+        assert_eq!(d.cell_pdf(0, h), 0.0);
     }
 
     #[test]

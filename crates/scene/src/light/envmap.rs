@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use math::{Distribution2D, Frame, PI, PdfA, PdfW, Vec2, Vec3};
+use math::{Distribution2D, Frame, PI, PdfA, PdfW, Vec3};
 use spectrum::Rgb;
 
 use super::{BoundingSphere, DirectSample, EmissionSample, HitRadiance, disc_origin, disc_pdf};
@@ -26,15 +26,36 @@ pub struct EnvMapLight {
     data: Arc<EnvMapData>,
 }
 
+/// One pixel of the map and the sampling density of the lattice cell whose upper-left corner it
+/// is, side by side: [`EnvMapLight::evaluate`] reads the corner pixel anyway, so the density
+/// comes with it in the same cache line (16 bytes, aligned: a texel never straddles two).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(align(16))]
+struct Texel {
+    /// The pixel with the scale applied; negatives clamped to 0.
+    radiance: Rgb,
+    /// Density per unit area of the sampling square on the cell `(x, y)` of this pixel
+    /// ([`Distribution2D::cell_pdf`]); 0 on the last row, which starts no cell.
+    cell_pdf: f32,
+}
+
 #[derive(Debug, PartialEq)]
 struct EnvMapData {
     width: usize,
     height: usize,
-    /// Pixels with the scale applied, row-major, row 0 at the top; negatives clamped to 0.
-    pixels: Vec<Rgb>,
+    /// The `W × H` pixels row-major, row 0 at the top, each with its cell's density: the
+    /// lookup cell of a point is its sampling cell, so one read replaces recomputing the
+    /// density from the cumulative sums.
+    texels: Vec<Texel>,
     /// Rotation local → world (columns: images of the local axes).
     to_world: [Vec3; 3],
     distribution: Distribution2D,
+    /// `½/W`: the offset between the map's `u` and the sampling square's `s`.
+    half_texel: f32,
+    /// `W` as `f32` (lattice columns per unit of `s`).
+    width_f32: f32,
+    /// `H − 1` as `f32` (lattice rows per unit of `t`).
+    cells_y_f32: f32,
     /// `∫ luminance(L(ω)) dω` over the sphere.
     luminance_integral: f32,
 }
@@ -106,13 +127,22 @@ impl EnvMapLight {
         let distribution = Distribution2D::new(&weights, width, cells_y)
             .or_else(|| Distribution2D::new(&vec![1.0; width * cells_y], width, cells_y))
             .ok_or_else(|| "environment map: cannot build the sampling distribution".to_string())?;
+        let cell_pdfs = distribution.cell_pdfs();
+        let texels = pixels
+            .iter()
+            .enumerate()
+            .map(|(i, radiance)| Texel { radiance: *radiance, cell_pdf: cell_pdfs.get(i).copied().unwrap_or(0.0) })
+            .collect();
         Ok(Self {
             data: Arc::new(EnvMapData {
                 width,
                 height,
-                pixels,
+                texels,
                 to_world,
                 distribution,
+                half_texel: 0.5 / width as f32,
+                width_f32: width as f32,
+                cells_y_f32: cells_y as f32,
                 luminance_integral: integral as f32,
             }),
         })
@@ -131,13 +161,36 @@ impl EnvMapLight {
 
     /// Radiance from `direction` and its density per steradian, both looked up at the same
     /// point of the map.
+    ///
+    /// The radiance is the bilinear interpolation at the sampling-square point `(s, t)`
+    /// (lattice coordinates `s·W`, periodic, and `t·(H − 1)`); the lattice cell it interpolates
+    /// in is the sampling cell of `(s, t)`, whose density `p` per unit area
+    /// ([`Distribution2D::pdf`]) is stored with the cell's upper-left pixel.
+    #[inline]
     fn evaluate(&self, direction: Vec3) -> (Rgb, f32) {
+        let d = &*self.data;
         let local = self.to_local(direction);
         let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
         let (s, t) = self.square_of(local);
-        let radiance = self.lookup(s, t);
+        // Lattice cell (i0, j0) and the position within it. `as usize` maps negative and NaN
+        // values to 0, as `Distribution2D` does when it finds the cell of a point.
+        let x = s * d.width_f32;
+        let i0 = (x.max(0.0) as usize).min(d.width - 1);
+        let fx = (x - i0 as f32).clamp(0.0, 1.0);
+        let i1 = if i0 + 1 == d.width { 0 } else { i0 + 1 };
+        let y = t * d.cells_y_f32;
+        let j0 = (y.max(0.0) as usize).min(d.height - 2);
+        let fy = (y - j0 as f32).clamp(0.0, 1.0);
+        let (top_row, bottom_row) = (&d.texels[j0 * d.width..], &d.texels[(j0 + 1) * d.width..]);
+        let corner = top_row[i0];
+        let top = corner.radiance * (1.0 - fx) + top_row[i1].radiance * fx;
+        let bottom = bottom_row[i0].radiance * (1.0 - fx) + bottom_row[i1].radiance * fx;
+        let radiance = top * (1.0 - fy) + bottom * fy;
         let pdf = if sin_theta > 0.0 {
-            self.data.distribution.pdf(Vec2::new(s, t)) / (2.0 * PI * PI * sin_theta)
+            // Distribution2D::pdf: 0 outside the closed unit square (NaN included).
+            let inside = (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t);
+            let pdf_area = if inside { corner.cell_pdf } else { 0.0 };
+            pdf_area / (2.0 * PI * PI * sin_theta)
         } else {
             0.0
         };
@@ -156,7 +209,7 @@ impl EnvMapLight {
     fn sample(&self, u: [f32; 2]) -> Option<(Vec3, Rgb, f32)> {
         let (p, _) = self.data.distribution.sample(u);
         let theta = p.y * PI;
-        let mut u_map = p.x + 0.5 / self.data.width as f32;
+        let mut u_map = p.x + self.data.half_texel;
         if u_map >= 1.0 {
             u_map -= 1.0;
         }
@@ -170,6 +223,7 @@ impl EnvMapLight {
         (pdf > 0.0 && !radiance.is_black()).then_some((direction, radiance, pdf))
     }
 
+    #[inline]
     fn to_local(&self, direction: Vec3) -> Vec3 {
         let [c0, c1, c2] = self.data.to_world;
         Vec3::new(c0.dot(direction), c1.dot(direction), c2.dot(direction))
@@ -177,29 +231,13 @@ impl EnvMapLight {
 
     /// The point `(s, t)` of the sampling square for a map-local direction: `s = u − ½/W`
     /// (wrapped), `t = v`.
+    #[inline]
     fn square_of(&self, v: Vec3) -> (f32, f32) {
-        let u = v.x.atan2(-v.z) * (0.5 / PI) - 0.5 / self.data.width as f32;
+        let u = v.x.atan2(-v.z) * (0.5 / PI) - self.data.half_texel;
         let s = u - u.floor();
         let s = if s >= 1.0 { 0.0 } else { s };
         let t = v.y.clamp(-1.0, 1.0).acos() / PI;
         (s, t.clamp(0.0, 1.0))
-    }
-
-    /// Bilinear interpolation at the sampling-square point `(s, t)`: lattice coordinates
-    /// `s·W` (periodic) and `t·(H − 1)`.
-    fn lookup(&self, s: f32, t: f32) -> Rgb {
-        let d = &*self.data;
-        let x = s * d.width as f32;
-        let i0 = (x.max(0.0) as usize).min(d.width - 1);
-        let fx = (x - i0 as f32).clamp(0.0, 1.0);
-        let i1 = (i0 + 1) % d.width;
-        let y = t * (d.height - 1) as f32;
-        let j0 = (y.max(0.0) as usize).min(d.height - 2);
-        let fy = (y - j0 as f32).clamp(0.0, 1.0);
-        let px = |i: usize, j: usize| d.pixels[j * d.width + i];
-        let top = px(i0, j0) * (1.0 - fx) + px(i1, j0) * fx;
-        let bottom = px(i0, j0 + 1) * (1.0 - fx) + px(i1, j0 + 1) * fx;
-        top * (1.0 - fy) + bottom * fy
     }
 }
 
@@ -256,5 +294,91 @@ impl EnvMapLight {
             emission_pdf: PdfW(pdf * disc_pdf(sphere)),
             cos_at_light: 1.0,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use math::{Rng, Vec2};
+
+    /// A small map with a black region, a bright spot and a seam that differs across `u = 0`.
+    fn test_light(width: u32, height: u32, to_world: [Vec3; 3]) -> EnvMapLight {
+        let pixels = (0..width * height)
+            .map(|i| {
+                let (x, y) = (i % width, i / width);
+                if y == 1 && x < width / 2 {
+                    Rgb::BLACK
+                } else {
+                    Rgb::new(1.0 + x as f32, 0.5 + (x * y % 3) as f32, if x == 2 { 40.0 } else { 0.25 })
+                }
+            })
+            .collect();
+        EnvMapLight::new(&TextureImage { width, height, pixels }, 1.5, to_world).unwrap()
+    }
+
+    /// `evaluate` as it was written before the per-light constants and the density table: the
+    /// density from `Distribution2D::pdf` and the radiance from a separate bilinear lookup.
+    fn evaluate_reference(light: &EnvMapLight, direction: Vec3) -> (Rgb, f32) {
+        let d = &*light.data;
+        let local = light.to_local(direction);
+        let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
+        let u = local.x.atan2(-local.z) * (0.5 / PI) - 0.5 / d.width as f32;
+        let s = u - u.floor();
+        let s = if s >= 1.0 { 0.0 } else { s };
+        let t = (local.y.clamp(-1.0, 1.0).acos() / PI).clamp(0.0, 1.0);
+        let x = s * d.width as f32;
+        let i0 = (x.max(0.0) as usize).min(d.width - 1);
+        let fx = (x - i0 as f32).clamp(0.0, 1.0);
+        let i1 = (i0 + 1) % d.width;
+        let y = t * (d.height - 1) as f32;
+        let j0 = (y.max(0.0) as usize).min(d.height - 2);
+        let fy = (y - j0 as f32).clamp(0.0, 1.0);
+        let px = |i: usize, j: usize| d.texels[j * d.width + i].radiance;
+        let top = px(i0, j0) * (1.0 - fx) + px(i1, j0) * fx;
+        let bottom = px(i0, j0 + 1) * (1.0 - fx) + px(i1, j0 + 1) * fx;
+        let radiance = top * (1.0 - fy) + bottom * fy;
+        let pdf = if sin_theta > 0.0 { d.distribution.pdf(Vec2::new(s, t)) / (2.0 * PI * PI * sin_theta) } else { 0.0 };
+        (radiance, pdf)
+    }
+
+    fn same_bits(a: (Rgb, f32), b: (Rgb, f32)) -> bool {
+        let bits = |v: (Rgb, f32)| [v.0.r.to_bits(), v.0.g.to_bits(), v.0.b.to_bits(), v.1.to_bits()];
+        bits(a) == bits(b)
+    }
+
+    #[test]
+    fn evaluate_is_bit_identical_to_the_reference() {
+        let (c, s) = (0.6f32.cos(), 0.6f32.sin());
+        let rotation = [Vec3::new(c, 0.0, -s), Vec3::Y, Vec3::new(s, 0.0, c)];
+        let mut rng = Rng::new(3, 5);
+        for (w, h, to_world) in [(8, 5, rotation), (1, 2, [Vec3::X, Vec3::Y, Vec3::Z]), (7, 16, rotation)] {
+            let light = test_light(w, h, to_world);
+            // Random directions, the poles, the seam and axis directions, and sampled directions.
+            let mut directions: Vec<Vec3> = (0..20_000)
+                .map(|_| {
+                    let [a, b] = rng.uniform2();
+                    let z = 1.0 - 2.0 * a;
+                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    Vec3::new(r * (2.0 * PI * b).cos(), z, r * (2.0 * PI * b).sin())
+                })
+                .collect();
+            directions.extend([Vec3::Y, -Vec3::Y, Vec3::X, -Vec3::X, Vec3::Z, -Vec3::Z]);
+            directions.extend((0..2000).filter_map(|_| light.sample(rng.uniform2()).map(|s| s.0)));
+            for direction in directions {
+                let world = to_world[0] * direction.x + to_world[1] * direction.y + to_world[2] * direction.z;
+                for v in [direction, world] {
+                    assert!(same_bits(light.evaluate(v), evaluate_reference(&light, v)), "{v}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_changed_density_is_detected() {
+        // Power check of the bit comparison: a density one ulp off is reported.
+        let light = test_light(8, 5, [Vec3::X, Vec3::Y, Vec3::Z]);
+        let (radiance, pdf) = light.evaluate(Vec3::new(0.3, 0.2, -0.9).normalize());
+        assert!(!same_bits((radiance, pdf), (radiance, f32::from_bits(pdf.to_bits() + 1))));
     }
 }
