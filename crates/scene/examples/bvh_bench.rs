@@ -20,6 +20,10 @@ use std::time::{Duration, Instant};
 
 type Tri = [Vec3A; 3];
 
+/// A named ray query for the interleaved A/B timing: the name and the query, which returns a
+/// number for the checksum.
+type NamedQuery<'a> = (&'a str, &'a (dyn Fn(&Ray, f32) -> f64 + Sync));
+
 /// Möller–Trumbore, accepting `0 < t < t_max`.
 #[inline(always)]
 fn intersect(tri: &Tri, origin: Vec3A, direction: Vec3A, t_max: f32) -> Option<f32> {
@@ -275,10 +279,7 @@ fn main() {
 
     // Interleaved A/B on one thread: rounds alternate between the trees on the same rays, so
     // that load from other processes affects both alike.
-    let interleaved = |name: &str,
-                       rays: &[(Ray, f32)],
-                       (a_name, a): (&str, &(dyn Fn(&Ray, f32) -> f64 + Sync)),
-                       (b_name, b): (&str, &(dyn Fn(&Ray, f32) -> f64 + Sync))| {
+    let interleaved = |name: &str, rays: &[(Ray, f32)], (a_name, a): NamedQuery, (b_name, b): NamedQuery| {
         const ROUNDS: usize = 6;
         let rays = &rays[..500_000];
         let mut times = [Duration::ZERO; 2];
