@@ -6,7 +6,9 @@
 //! interleaved rounds on the same rays.
 //!
 //! Run with `cargo run --release -p scene --features binary-bvh --example bvh_bench [-- STACKS]`
-//! (default 500 stacks, i.e. 4·500² = 1M triangles).
+//! (default 500 stacks, i.e. 4·500² = 1M triangles). With `--features binary-bvh,embree` also
+//! Embree 3 (`scene::accel::EmbreeAccel`, docs/embree.md): build time, the same rows and an
+//! interleaved A/B of our 4-wide tree against Embree.
 
 use math::{Aabb, Ray, Rng, Vec3, Vec3A, warp};
 use obvhs::BvhBuildParams;
@@ -17,6 +19,10 @@ use scene::accel::{BinaryBvh, Bvh, TraversalCounts};
 use std::time::{Duration, Instant};
 
 type Tri = [Vec3A; 3];
+
+/// A named ray query for the interleaved A/B timing: the name and the query, which returns a
+/// number for the checksum.
+type NamedQuery<'a> = (&'a str, &'a (dyn Fn(&Ray, f32) -> f64 + Sync));
 
 /// Möller–Trumbore, accepting `0 < t < t_max`.
 #[inline(always)]
@@ -273,10 +279,7 @@ fn main() {
 
     // Interleaved A/B on one thread: rounds alternate between the trees on the same rays, so
     // that load from other processes affects both alike.
-    let interleaved = |name: &str,
-                       rays: &[(Ray, f32)],
-                       a: &(dyn Fn(&Ray, f32) -> f64 + Sync),
-                       b: &(dyn Fn(&Ray, f32) -> f64 + Sync)| {
+    let interleaved = |name: &str, rays: &[(Ray, f32)], (a_name, a): NamedQuery, (b_name, b): NamedQuery| {
         const ROUNDS: usize = 6;
         let rays = &rays[..500_000];
         let mut times = [Duration::ZERO; 2];
@@ -290,14 +293,32 @@ fn main() {
         }
         let rate = |t: Duration| (rays.len() * ROUNDS) as f64 / t.as_secs_f64() / 1e6;
         println!(
-            "A/B {name}, 1 thread (cpu), {ROUNDS} interleaved rounds: 4-wide {:.2}, binary {:.2} Mrays/s = {:.2}x",
+            "A/B {name}, 1 thread (cpu), {ROUNDS} interleaved rounds: {a_name} {:.2}, {b_name} {:.2} Mrays/s, time {b_name} / time {a_name} = {:.2}",
             rate(times[0]),
             rate(times[1]),
             times[1].as_secs_f64() / times[0].as_secs_f64()
         );
     };
     single_pool.install(|| {
-        interleaved("closest hit", &rays, &ours_closest, &binary_closest);
-        interleaved("any hit", &shadows, &ours_any, &binary_any);
+        interleaved("closest hit", &rays, ("4-wide", &ours_closest), ("binary", &binary_closest));
+        interleaved("any hit", &shadows, ("4-wide", &ours_any), ("binary", &binary_any));
     });
+
+    // --- Embree 3, over the same triangles (ids = indices).
+    #[cfg(feature = "embree")]
+    {
+        let verts: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(Vec3::from)).collect();
+        let (embree, embree_build) = time(|| scene::accel::EmbreeAccel::build(&verts).expect("an Embree scene"));
+        println!("\nEmbree 3 build {embree_build:.3} s (Embree's own threads)");
+        let embree_closest = |ray: &Ray, t_max: f32| embree.closest_hit(ray, t_max).map_or(0.0, |h| h.1 as f64);
+        let embree_any = |ray: &Ray, t_max: f32| embree.any_hit(ray, t_max) as u32 as f64;
+        report("scene::accel::Bvh closest_hit", &rays, &ours_closest);
+        report("Embree closest_hit", &rays, &embree_closest);
+        report("scene::accel::Bvh any_hit (shadow)", &shadows, &ours_any);
+        report("Embree any_hit (shadow)", &shadows, &embree_any);
+        single_pool.install(|| {
+            interleaved("closest hit", &rays, ("4-wide", &ours_closest), ("Embree", &embree_closest));
+            interleaved("any hit", &shadows, ("4-wide", &ours_any), ("Embree", &embree_any));
+        });
+    }
 }

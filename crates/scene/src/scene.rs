@@ -150,7 +150,13 @@ pub struct Scene {
     /// Per material: [`Material::is_fibre`] (hits on the back side are skipped, see
     /// [`Scene::alpha_keeps`]).
     pub(crate) fibres: Vec<bool>,
+    /// Our BVH over the world primitives and instances (empty when [`Scene::embree`] answers
+    /// the queries).
     bvh: Bvh,
+    /// The Embree backend when the scene qualifies for it (feature `embree`, see
+    /// `crate::accel::embree`).
+    #[cfg(feature = "embree")]
+    embree: Option<crate::accel::EmbreeAccel>,
 }
 
 impl Scene {
@@ -186,6 +192,11 @@ impl Scene {
         let scene_box = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
         let (center, radius) = if scene_box.is_empty() { (Vec3::ZERO, 1.0) } else { scene_box.bounding_sphere() };
         let background = lights.iter().position(Light::is_environment).map(|i| i as u32);
+        #[cfg(feature = "embree")]
+        let embree = embree_backend(&primitives, &materials, instances.len());
+        #[cfg(feature = "embree")]
+        let bvh = if embree.is_some() { Bvh::build(&[]) } else { Bvh::build(&bounds) };
+        #[cfg(not(feature = "embree"))]
         let bvh = Bvh::build(&bounds);
         let bounding_sphere = BoundingSphere { center, radius };
         // One emitter per light (one id per light: cannot fail).
@@ -214,7 +225,19 @@ impl Scene {
             anisotropic,
             fibres,
             bvh,
+            #[cfg(feature = "embree")]
+            embree,
         }
+    }
+
+    /// The acceleration structure that answers [`Scene::intersect`] and [`Scene::occluded`]:
+    /// `"embree"` (feature `embree`, triangle-only scenes, see `docs/embree.md`) or `"bvh"`.
+    pub fn accel_backend(&self) -> &'static str {
+        #[cfg(feature = "embree")]
+        if self.embree.is_some() {
+            return "embree";
+        }
+        "bvh"
     }
 
     /// Whether material `index` reads a mesh attribute ([`Material::mesh_attribute`]), whose
@@ -279,6 +302,11 @@ impl Scene {
         // with the nearest distance found so far and keeps only strictly nearer hits, so the
         // last instance hit reported is the nearest one whenever an instance wins.
         let mut object_primitive = 0;
+        #[cfg(feature = "embree")]
+        if let Some(embree) = &self.embree {
+            let (index, distance) = embree.closest_hit(ray, f32::INFINITY)?;
+            return Some(self.world_hit(ray, index, distance));
+        }
         let (index, distance) = self.bvh.closest_hit(ray, f32::INFINITY, |i, r, t_max| {
             if i < world_primitives {
                 let primitive = &self.primitives[i as usize];
@@ -291,25 +319,11 @@ impl Scene {
             object_primitive = primitive;
             Some(t)
         })?;
-        let position = ray.at(distance);
         if index < world_primitives {
-            let primitive = &self.primitives[index as usize];
-            let (normal, shading_normal, uv, attribute) = self.local_surface(primitive, position);
-            let tangent = self.tangent(primitive, position, normal);
-            return Some(SurfaceHit {
-                position,
-                normal,
-                shading_normal,
-                uv,
-                tangent,
-                attribute,
-                distance,
-                primitive: index,
-                material: primitive.material,
-                light: primitive.light,
-            });
+            return Some(self.world_hit(ray, index, distance));
         }
         // An instance: the surface in object space, normals back to world space.
+        let position = ray.at(distance);
         let instance = &self.instances[(index - world_primitives) as usize];
         let primitive = &self.objects[instance.object as usize].primitives[object_primitive as usize];
         let local_position = instance.to_object_ray(ray).at(distance);
@@ -327,6 +341,27 @@ impl Scene {
             material: primitive.material,
             light: None,
         })
+    }
+
+    /// The hit on world primitive `index` at `distance` along `ray`.
+    #[inline]
+    fn world_hit(&self, ray: &Ray, index: u32, distance: f32) -> SurfaceHit {
+        let position = ray.at(distance);
+        let primitive = &self.primitives[index as usize];
+        let (normal, shading_normal, uv, attribute) = self.local_surface(primitive, position);
+        let tangent = self.tangent(primitive, position, normal);
+        SurfaceHit {
+            position,
+            normal,
+            shading_normal,
+            uv,
+            tangent,
+            attribute,
+            distance,
+            primitive: index,
+            material: primitive.material,
+            light: primitive.light,
+        }
     }
 
     /// Geometric normal, shading normal, texture coordinates and mesh attribute value of
@@ -423,6 +458,10 @@ impl Scene {
         let t_max = distance - 2.0 * RAY_EPSILON;
         if t_max <= 0.0 {
             return false;
+        }
+        #[cfg(feature = "embree")]
+        if let Some(embree) = &self.embree {
+            return embree.any_hit(&ray, t_max);
         }
         let world_primitives = self.primitives.len() as u32;
         self.bvh.any_hit(&ray, t_max, |i, r, t| {
@@ -528,6 +567,23 @@ impl LightSpectrum {
         };
         if base > 0.0 { value / base } else { 0.0 }
     }
+}
+
+/// The Embree backend for a scene with these world primitives, materials and number of
+/// instances, when it qualifies ([`crate::accel::embree`]) and `VCM_ACCEL=bvh` does not force
+/// our BVH. A scene Embree cannot build keeps our BVH.
+#[cfg(feature = "embree")]
+fn embree_backend(
+    primitives: &[Primitive],
+    materials: &[Material],
+    instances: usize,
+) -> Option<crate::accel::EmbreeAccel> {
+    use crate::accel::embree;
+    let fibres: Vec<bool> = materials.iter().map(Material::is_fibre).collect();
+    if !embree::embree_requested() || !embree::qualifies(primitives, &fibres, instances) {
+        return None;
+    }
+    crate::accel::EmbreeAccel::from_primitives(primitives).ok()
 }
 
 /// The light selection distribution over `lights` ([`light_selection_weights`]) with the

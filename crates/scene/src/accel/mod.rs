@@ -9,13 +9,16 @@
 //! Files: `build.rs` (binary SAH build), `binary.rs` (its node layout), `wide.rs` (4-wide nodes
 //! and the collapse), `ray_box.rs` (the 4-lane slab test), `traverse.rs` (the queries and their
 //! tie rule), `binary_traverse.rs` (the previous binary traversal, only for A/B benchmarks
-//! behind the `binary-bvh` feature, and for tests).
+//! behind the `binary-bvh` feature, and for tests), `embree.rs` (the optional Embree 3 backend
+//! for triangle-only scenes, behind the `embree` feature; see `docs/embree.md`).
 
 mod binary;
 #[cfg(any(test, feature = "binary-bvh"))]
 #[cfg_attr(not(feature = "binary-bvh"), allow(dead_code))]
 mod binary_traverse;
 mod build;
+#[cfg(feature = "embree")]
+pub mod embree;
 mod ray_box;
 mod traverse;
 mod wide;
@@ -27,6 +30,8 @@ use math::{Aabb, Ray};
 
 #[cfg(feature = "binary-bvh")]
 pub use binary_traverse::BinaryBvh;
+#[cfg(feature = "embree")]
+pub use embree::EmbreeAccel;
 
 /// Largest tree depth (root = depth 0); the build guarantees a smaller depth, which bounds the
 /// traversal stacks.
