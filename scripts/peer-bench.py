@@ -101,8 +101,20 @@ def bootstrap():
     os.execv(python, [python, os.path.abspath(__file__)] + sys.argv[1:])
 
 
+LLVM19 = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
+
+
 def llvm_variant():
-    """Selects Mitsuba's llvm_ad_rgb variant, installing libllvm19 when root and it is missing."""
+    """Selects Mitsuba's llvm_ad_rgb variant, installing libllvm19 when root and it is missing.
+
+    Dr.Jit takes the first libLLVM it finds; an older one (Debian 12 also ships 14 and 15) loads
+    but aborts while compiling (`Cannot select: fminimum`), so LLVM 19 is installed when it is
+    missing and named explicitly (DRJIT_LIBLLVM_PATH) when present."""
+    if not os.path.exists(LLVM19) and os.geteuid() == 0 and shutil.which("apt-get") is not None:
+        log("Mitsuba's llvm variant needs LLVM 19: apt-get install -y libllvm19")
+        run(["apt-get", "install", "-y", "-q", "libllvm19"])
+    if os.path.exists(LLVM19):
+        os.environ.setdefault("DRJIT_LIBLLVM_PATH", LLVM19)
     import mitsuba as mi
 
     try:
