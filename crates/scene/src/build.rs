@@ -239,11 +239,7 @@ impl Parts {
                     }
                     _ => None,
                 };
-                let parallelogram = parallelogram.map(|light| {
-                    self.lights.push(Light::Area(light));
-                    self.light_spectra.push(spectrum.clone());
-                    self.lights.len() as u32 - 1
-                });
+                let parallelogram = parallelogram.map(|light| self.push_light(Light::Area(light), spectrum.clone()));
                 for (triangle, extra) in mesh_triangles(mesh, attribute) {
                     let Some(triangle) = triangle else {
                         self.report.degenerate_triangles += 1;
@@ -256,24 +252,16 @@ impl Parts {
                     let light = match (texture.or(constant_emission.as_ref()), &emission_mask) {
                         // A masked triangle emits where its mask is on (nothing if it is off everywhere).
                         (Some(texture), Some(mask)) => {
-                            TexturedTriangleLight::masked(triangle, uvs, texture.clone(), mask.clone()).map(|light| {
-                                self.lights.push(Light::TexturedTriangle(light));
-                                self.light_spectra.push(None);
-                                self.lights.len() as u32 - 1
-                            })
+                            TexturedTriangleLight::masked(triangle, uvs, texture.clone(), mask.clone())
+                                .map(|light| self.push_light(Light::TexturedTriangle(light), None))
                         }
                         _ => match texture {
                             // A textured triangle that is black everywhere does not emit.
-                            Some(texture) => TexturedTriangleLight::new(triangle, uvs, texture.clone()).map(|light| {
-                                self.lights.push(Light::TexturedTriangle(light));
-                                self.light_spectra.push(None);
-                                self.lights.len() as u32 - 1
-                            }),
+                            Some(texture) => TexturedTriangleLight::new(triangle, uvs, texture.clone())
+                                .map(|light| self.push_light(Light::TexturedTriangle(light), None)),
                             None if parallelogram.is_some() => parallelogram,
                             None => emission.map(|radiance| {
-                                self.lights.push(Light::Area(AreaLight::new(triangle, radiance)));
-                                self.light_spectra.push(spectrum.clone());
-                                self.lights.len() as u32 - 1
+                                self.push_light(Light::Area(AreaLight::new(triangle, radiance)), spectrum.clone())
                             }),
                         },
                     };
@@ -301,9 +289,7 @@ impl Parts {
                     Some(radiance) => {
                         let light = AreaLight::sphere(*center, *radius, *flip_normals, radiance)
                             .map_err(|e| format!("sphere '{}': {e}", shape.name))?;
-                        self.lights.push(Light::Area(light));
-                        self.light_spectra.push(spectrum.clone());
-                        Some(self.lights.len() as u32 - 1)
+                        Some(self.push_light(Light::Area(light), spectrum.clone()))
                     }
                     None => None,
                 };
@@ -323,9 +309,7 @@ impl Parts {
                     Some(radiance) => {
                         let light = AreaLight::disc(*center, *axis_u, *axis_v, *flip_normals, radiance)
                             .map_err(|e| format!("disk '{}': {e}", shape.name))?;
-                        self.lights.push(Light::Area(light));
-                        self.light_spectra.push(spectrum.clone());
-                        Some(self.lights.len() as u32 - 1)
+                        Some(self.push_light(Light::Area(light), spectrum.clone()))
                     }
                     None => None,
                 };
@@ -339,6 +323,13 @@ impl Parts {
         // All lights of this shape form one emitter.
         self.light_groups.resize(self.lights.len(), first_light);
         Ok(())
+    }
+
+    /// Adds `light` with its emission spectrum (`None`: its RGB value) and returns its index.
+    fn push_light(&mut self, light: Light, spectrum: Option<LightSpectrum>) -> u32 {
+        self.lights.push(light);
+        self.light_spectra.push(spectrum);
+        self.lights.len() as u32 - 1
     }
 
     /// The index of the alpha mask of `shape` in `alpha_masks` (added there), or `None` when
