@@ -3,8 +3,17 @@
 //! (`cbox_dict.exr`, 832 spp, path tracer, max_depth 8, gaussian filter).
 //!
 //! Two checks: the per-channel image means within 1 % of the reference's, and 32×32-pixel block
-//! means passing a Z-test with Šidák correction. The block's standard error combines ours (from
-//! the spread of independent iterations) and the reference's — see `reference_block_error`.
+//! means passing a t-test with Šidák correction. The block's standard error combines ours (from
+//! the spread of 64 independent iterations, hence Student's t) and the reference's — see
+//! `reference_block_error`. The test prints the smallest block bias it rejects.
+//!
+//! `vcm` is consistent, not unbiased: where a merging disc of the first iteration's radius
+//! reaches across an edge onto another surface (the floor under the boxes, the corners), the
+//! photons counted there bias the block by an amount proportional to the radius. Measured on
+//! block (192, 192) at 16 iterations, seed 11: +4.3 %, +2.0 %, +0.8 %, +0.6 % against the
+//! reference for radius factors 0.006, 0.003, 0.0015, 0.00075. Such blocks are left out of the
+//! block test for merging algorithms, as in `vcm_consistency.rs` (the image means keep every
+//! pixel); the test prints how many blocks remain and fails when fewer than half do.
 
 mod common;
 
@@ -12,7 +21,7 @@ use std::path::PathBuf;
 
 use render::driver::Budget;
 use scene::Scene;
-use testkit::{sidak, z_test_p};
+use testkit::{sidak, t_test_p, welch_dof};
 
 fn shared() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/mitsuba/cornell-box")
@@ -45,6 +54,16 @@ fn reference_block_error(block_mean: f64, relative_error: f64, block_pixels: usi
     block_mean.abs() * relative_error / (block_pixels as f64).sqrt()
 }
 
+/// The `|t|` at which [`t_test_p`] equals `alpha` with `dof` degrees of freedom (bisection).
+fn t_threshold(alpha: f64, dof: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1e3f64);
+    while hi - lo > 1e-6 {
+        let mid = 0.5 * (lo + hi);
+        if t_test_p(mid, 1.0, dof) < alpha { hi = mid } else { lo = mid }
+    }
+    hi
+}
+
 fn check(algorithm: &str, iterations: u64) {
     let (scene, max_length, reference, relative_error) = load();
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
@@ -54,6 +73,10 @@ fn check(algorithm: &str, iterations: u64) {
     settings.budget = Budget::Iterations(iterations);
     let block = 32u32;
     let estimate = common::block_estimate(&scene, &settings, iterations, block);
+    let merging = matches!(algorithm, "ppm" | "bpm" | "vcm");
+    let radius = settings.vcm_settings().map(|v| render::vcm::base_radius(&scene, &v));
+    let views = common::block_views(&scene, block);
+    let comparable = |b: usize| !merging || radius.is_none_or(|r| views[b].clearance > r);
 
     // Image means per channel.
     let reference_means: [f64; 3] =
@@ -70,10 +93,17 @@ fn check(algorithm: &str, iterations: u64) {
     }
 
     // Block means.
-    let alpha = sidak(1e-3, blocks * 3);
     let bx = estimate.blocks_x;
     let mut worst = 0.0f64;
-    for b in 0..blocks {
+    let mut detectable = Vec::new();
+    let compared: Vec<usize> = (0..blocks).filter(|b| comparable(*b)).collect();
+    eprintln!(
+        "{algorithm}: {} of {blocks} blocks compared (merging radius {radius:?}: blocks within it of an edge left out)",
+        compared.len()
+    );
+    assert!(2 * compared.len() >= blocks, "too few blocks away from edges: {}", compared.len());
+    let alpha = sidak(1e-3, compared.len() * 3);
+    for b in compared.iter().copied() {
         let (x0, y0) = ((b % bx) * block as usize, (b / bx) * block as usize);
         for c in 0..3 {
             let mut sum = 0.0f64;
@@ -83,34 +113,42 @@ fn check(algorithm: &str, iterations: u64) {
                 }
             }
             let reference_mean = sum / (block * block) as f64;
-            let error = estimate.std_errors[b * 3 + c].hypot(reference_block_error(
-                reference_mean,
-                relative_error,
-                (block * block) as usize,
-            ));
-            let z = (estimate.means[b * 3 + c] - reference_mean) / error.max(1e-12);
+            let ours = estimate.std_errors[b * 3 + c];
+            let theirs = reference_block_error(reference_mean, relative_error, (block * block) as usize);
+            let error = ours.hypot(theirs).max(1e-12);
+            // Our error is estimated from `iterations` samples, the reference's is taken as
+            // known: Student's t with the Welch–Satterthwaite degrees of freedom (≥ iterations − 1).
+            let dof = welch_dof(ours, (iterations - 1) as f64, theirs, f64::INFINITY);
+            let d = estimate.means[b * 3 + c] - reference_mean;
+            let z = d / error;
             worst = worst.max(z.abs());
-            if z_test_p(estimate.means[b * 3 + c] - reference_mean, error.max(1e-12)) < alpha {
+            detectable.push(t_threshold(alpha, dof) * error / reference_mean.abs().max(1e-12));
+            if t_test_p(d, error, dof) < alpha {
                 failures.push(format!(
-                    "block ({x0},{y0}) channel {c}: ours {:.5} ± {:.5}, Mitsuba {reference_mean:.5}, z = {z:.2}",
+                    "block ({x0},{y0}) channel {c}: ours {:.5} ± {ours:.5}, Mitsuba {reference_mean:.5}, t = {z:.2} \
+                     ({dof:.0} degrees of freedom)",
                     estimate.means[b * 3 + c],
-                    estimate.std_errors[b * 3 + c]
                 ));
             }
         }
     }
-    eprintln!("{algorithm}: worst block |z| = {worst:.2} over {} entries (Šidák α = {alpha:.2e})", blocks * 3);
+    detectable.sort_by(f64::total_cmp);
+    eprintln!(
+        "{algorithm}: a block mean off by {:.2} % fails (median block; a t-test at the Šidák level)",
+        100.0 * detectable[detectable.len() / 2]
+    );
+    eprintln!("{algorithm}: worst block |t| = {worst:.2} over {} entries (Šidák α = {alpha:.2e})", compared.len() * 3);
     assert!(failures.is_empty(), "{algorithm} differs from Mitsuba:\n{}", failures.join("\n"));
 }
 
 #[test]
 #[ignore = "needs ../shared: Mitsuba's Cornell box and its reference image"]
 fn shared_cornell_box_pt_matches_mitsuba() {
-    check("pt", 16);
+    check("pt", 64);
 }
 
 #[test]
 #[ignore = "needs ../shared: Mitsuba's Cornell box and its reference image"]
 fn shared_cornell_box_vcm_matches_mitsuba() {
-    check("vcm", 16);
+    check("vcm", 64);
 }

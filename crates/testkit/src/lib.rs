@@ -21,4 +21,4 @@ pub use chi2::{
     Chi2Outcome, Integration, MIN_EXPECTED, PDF_INTEGRAL_TOLERANCE, assert_chi2, chi2_sphere, chi2_sphere_with,
     chi2_square, chi2_square_with,
 };
-pub use stats::{MeanVar, ZTestOutcome, sidak, z_test_entries, z_test_p};
+pub use stats::{MeanVar, ZTestOutcome, sidak, t_test_p, welch_dof, z_test_entries, z_test_p};

@@ -2,6 +2,7 @@
 //! correction for families of tests, and an entry-by-entry comparison of two estimates (for
 //! example two renderings of the same scene, pixel by pixel or block by block).
 
+use statrs::distribution::{ContinuousCDF, StudentsT};
 use statrs::function::erf::erfc;
 use std::fmt;
 
@@ -99,6 +100,33 @@ pub fn z_test_p(d: f64, se: f64) -> f64 {
     erfc(z / std::f64::consts::SQRT_2).clamp(0.0, 1.0)
 }
 
+/// Two-sided p-value of a t-test: the probability that `|T| ≥ |d| / se` for a Student-t
+/// variable `T` with `dof` degrees of freedom. This is the null distribution of a difference
+/// whose standard error `se` was itself estimated from `dof + 1` independent, normally
+/// distributed samples (for example the iterations of a render): with few samples the
+/// estimated error is often too small, and a z-test would reject far too often.
+///
+/// Edge cases as [`z_test_p`]; `dof` must be positive (an infinite `dof` is the z-test).
+pub fn t_test_p(d: f64, se: f64, dof: f64) -> f64 {
+    assert!(dof > 0.0, "a t-test needs positive degrees of freedom, got {dof}");
+    if !d.is_finite() || !se.is_finite() || se <= 0.0 || dof.is_infinite() {
+        return z_test_p(d, se);
+    }
+    let t = (d / se).abs();
+    let student = StudentsT::new(0.0, 1.0, dof).expect("valid Student-t parameters");
+    (2.0 * student.sf(t)).clamp(0.0, 1.0)
+}
+
+/// Degrees of freedom of the difference of two estimates with standard errors `se_a` and
+/// `se_b`, estimated with `dof_a` and `dof_b` degrees of freedom (Welch–Satterthwaite):
+/// `(se_a² + se_b²)² / (se_a⁴/dof_a + se_b⁴/dof_b)`. An infinite `dof` marks an error that is
+/// known, not estimated. Lies between `min(dof_a, dof_b)` and `dof_a + dof_b`.
+pub fn welch_dof(se_a: f64, dof_a: f64, se_b: f64, dof_b: f64) -> f64 {
+    let (va, vb) = (se_a * se_a, se_b * se_b);
+    let denominator = va * va / dof_a + vb * vb / dof_b;
+    if denominator > 0.0 { (va + vb) * (va + vb) / denominator } else { f64::INFINITY }
+}
+
 /// Šidák-corrected per-test significance level: running `tests` independent tests each at this
 /// level rejects at least one true hypothesis with probability `alpha`, i.e.
 /// `1 − (1 − alpha)^(1/tests)`. Zero tests are treated as one.
@@ -191,6 +219,35 @@ pub fn z_test_entries(a_mean: &[f64], a_se: &[f64], b_mean: &[f64], b_se: &[f64]
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Against the closed forms of one and two degrees of freedom (Cauchy: `1 − 2·atan(t)/π`;
+    /// `ν = 2`: `1 − t/√(2 + t²)`), and the z-test as the degrees of freedom grow.
+    #[test]
+    fn t_test_matches_closed_forms() {
+        for t in [0.0, 0.5, 1.0, 2.5, 10.0, 300.0] {
+            let cauchy = 1.0 - 2.0 * f64::atan(t) / std::f64::consts::PI;
+            let two = 1.0 - t / (2.0 + t * t).sqrt();
+            assert!((t_test_p(t, 1.0, 1.0) - cauchy).abs() < 1e-12 * cauchy.max(1e-3), "ν = 1, t = {t}");
+            assert!((t_test_p(-t, 1.0, 2.0) - two).abs() < 1e-10 * two.max(1e-3), "ν = 2, t = {t}");
+        }
+        // The 99.5 % quantile of t with 15 degrees of freedom is 2.947 (tables).
+        assert!((t_test_p(2.947, 1.0, 15.0) - 0.01).abs() < 1e-4);
+        let (z, t) = (z_test_p(4.0, 1.0), t_test_p(4.0, 1.0, 1e7));
+        // The tails differ by a relative O(t⁴/ν) ≈ 1e-5 here.
+        assert!((t - z).abs() < 1e-4 * z, "{t} vs {z}");
+        assert_eq!(t_test_p(4.0, 1.0, f64::INFINITY), z);
+        // Heavier tails than the normal: rejects less at the same |d|/se.
+        assert!(t_test_p(5.0, 1.0, 15.0) > 100.0 * z_test_p(5.0, 1.0));
+        assert_eq!(t_test_p(f64::NAN, 1.0, 15.0), 0.0);
+    }
+
+    #[test]
+    fn welch_dof_limits() {
+        assert_eq!(welch_dof(1.0, 15.0, 0.0, 100.0), 15.0);
+        assert!((welch_dof(1.0, 15.0, 1.0, 15.0) - 30.0).abs() < 1e-12);
+        assert!(welch_dof(1.0, 15.0, 0.1, f64::INFINITY) > 15.0);
+        assert_eq!(welch_dof(0.0, 15.0, 0.0, 15.0), f64::INFINITY);
+    }
 
     #[test]
     fn mean_var_known_values() {
