@@ -1,9 +1,12 @@
 //! The per-hit [`Bsdf`]: the public face of the materials, dispatching once to SmallVCM's
-//! reference BSDF or to the shading-normal mixture of leaf models.
+//! reference BSDF, to the plain Lambertian of a `diffuse` material (the most common one, built
+//! without the mixture's machinery and bit-identical to it), or to the shading-normal mixture
+//! of leaf models.
 
 use math::Vec3;
 
 use super::description::Material;
+use super::diffuse_bsdf::DiffuseBsdf;
 use super::mixture::ModelBsdf;
 use super::query::{BsdfEval, BsdfSample};
 use super::reference::ReferenceBsdf;
@@ -28,6 +31,7 @@ pub struct Bsdf {
 #[derive(Clone, Copy, Debug)]
 enum Inner {
     Reference(ReferenceBsdf),
+    Diffuse(DiffuseBsdf),
     Model(ModelBsdf),
 }
 
@@ -61,6 +65,9 @@ impl Bsdf {
             Material::Reference(m) => {
                 Some(Bsdf { inner: Inner::Reference(ReferenceBsdf::new(m, point.geometric_normal, fixed, mode)?) })
             }
+            Material::Diffuse { .. } => {
+                Some(Bsdf { inner: Inner::Diffuse(DiffuseBsdf::new(material, point, fixed, mode)?) })
+            }
             _ => Self::new_model(material, point, fixed, mode, hero),
         }
     }
@@ -82,6 +89,7 @@ impl Bsdf {
     pub fn continuation_probability(&self) -> f32 {
         match &self.inner {
             Inner::Reference(b) => b.continuation_probability(),
+            Inner::Diffuse(b) => b.continuation,
             Inner::Model(b) => b.continuation,
         }
     }
@@ -91,6 +99,7 @@ impl Bsdf {
     pub fn is_delta(&self) -> bool {
         match &self.inner {
             Inner::Reference(b) => b.is_delta(),
+            Inner::Diffuse(_) => false,
             Inner::Model(b) => b.non_delta_probability <= 0.0,
         }
     }
@@ -106,7 +115,7 @@ impl Bsdf {
     /// there, on either side, so the MIS weights stay consistent.
     pub fn null_transmission(&self) -> Option<spectrum::Rgb> {
         match &self.inner {
-            Inner::Reference(_) => None,
+            Inner::Reference(_) | Inner::Diffuse(_) => None,
             Inner::Model(b) => b.null_transmission(),
         }
     }
@@ -115,6 +124,7 @@ impl Bsdf {
     pub fn has_specular(&self) -> bool {
         match &self.inner {
             Inner::Reference(b) => b.has_specular(),
+            Inner::Diffuse(_) => false,
             Inner::Model(b) => b.delta_probability > 0.0,
         }
     }
@@ -123,6 +133,7 @@ impl Bsdf {
     pub fn mode(&self) -> TransportMode {
         match &self.inner {
             Inner::Reference(b) => b.mode,
+            Inner::Diffuse(b) => b.mode,
             Inner::Model(b) => b.mode,
         }
     }
@@ -131,6 +142,7 @@ impl Bsdf {
     pub fn cos_fixed(&self) -> f32 {
         match &self.inner {
             Inner::Reference(b) => b.cos_fixed(),
+            Inner::Diffuse(b) => b.cos_fixed_geometric.abs(),
             Inner::Model(b) => b.cos_fixed_geometric.abs(),
         }
     }
@@ -139,6 +151,7 @@ impl Bsdf {
     pub fn fixed_direction(&self) -> Vec3 {
         match &self.inner {
             Inner::Reference(b) => b.fixed_direction(),
+            Inner::Diffuse(b) => b.fixed,
             Inner::Model(b) => b.fixed,
         }
     }
@@ -151,6 +164,7 @@ impl Bsdf {
     pub fn evaluate(&self, generated: Vec3) -> Option<BsdfEval> {
         match &self.inner {
             Inner::Reference(b) => b.evaluate(generated),
+            Inner::Diffuse(b) => b.evaluate(generated),
             Inner::Model(b) => b.evaluate(generated),
         }
     }
@@ -164,6 +178,7 @@ impl Bsdf {
     pub fn sample(&self, u: [f32; 3]) -> Option<BsdfSample> {
         match &self.inner {
             Inner::Reference(b) => b.sample(u),
+            Inner::Diffuse(b) => b.sample(u),
             Inner::Model(b) => b.sample(u, false),
         }
     }
@@ -176,6 +191,7 @@ impl Bsdf {
     pub fn sample_specular(&self, u: [f32; 3]) -> Option<BsdfSample> {
         match &self.inner {
             Inner::Reference(b) => b.sample_specular(u),
+            Inner::Diffuse(_) => None,
             Inner::Model(b) => b.sample(u, true),
         }
     }

@@ -16,7 +16,7 @@ use super::dispatch::Model;
 use super::lobe::Sampled;
 use super::map_adapter::MapAdapter;
 use super::query::{BsdfEval, BsdfSample, PdfPair};
-use super::shading::{ShadingPoint, TransportMode, consistent, sides_allowed};
+use super::shading::{ShadingPoint, TransportMode, consistent, oriented_shading_normal, sides_allowed};
 use crate::texture::TexturePoint;
 
 /// The BSDF of every material but [`Material::Reference`]: a weighted sum of leaf models
@@ -96,15 +96,7 @@ impl ModelBsdf {
         hero: Option<f32>,
     ) -> Option<ModelBsdf> {
         let geometric = point.geometric_normal;
-        // The shading normal on the side of the geometric normal (a degenerate one is replaced
-        // by the geometric normal).
-        let mut shading = point.shading_normal;
-        let cos_normals = shading.dot(geometric);
-        if cos_normals.abs() < 1e-4 || cos_normals.is_nan() || !shading.is_finite() {
-            shading = geometric;
-        } else if cos_normals < 0.0 {
-            shading = -shading;
-        }
+        let mut shading = oriented_shading_normal(point);
         let cos_fixed_geometric = fixed.dot(geometric);
         // A perturbed normal is mirrored for a camera-side direction below it (in importance
         // mode: for a fixed direction that cannot scatter about it, see `evaluate`).
@@ -443,7 +435,7 @@ impl ModelBsdf {
 
 /// `x > 0` (false for NaN).
 #[inline]
-fn positive(x: f32) -> bool {
+pub(super) fn positive(x: f32) -> bool {
     x > 0.0
 }
 

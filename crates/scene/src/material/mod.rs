@@ -83,6 +83,7 @@ mod conductor;
 mod description;
 mod dielectric;
 mod diffuse;
+mod diffuse_bsdf;
 mod diffuse_transmission;
 mod disney;
 mod dispatch;

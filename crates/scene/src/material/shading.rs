@@ -54,6 +54,23 @@ impl ShadingPoint {
     }
 }
 
+/// The unit shading normal of `point` on the side of its geometric normal; a degenerate one
+/// (nearly perpendicular to the geometric normal, NaN or infinite) is replaced by the geometric
+/// normal. Every BSDF built on a shading point orients its lobes by this normal.
+#[inline]
+pub(super) fn oriented_shading_normal(point: &ShadingPoint) -> Vec3 {
+    let geometric = point.geometric_normal;
+    let shading = point.shading_normal;
+    let cos_normals = shading.dot(geometric);
+    if cos_normals.abs() < 1e-4 || cos_normals.is_nan() || !shading.is_finite() {
+        geometric
+    } else if cos_normals < 0.0 {
+        -shading
+    } else {
+        shading
+    }
+}
+
 /// Which quantity a sub-path carries. The adjoint BSDF differs for refraction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TransportMode {
