@@ -133,8 +133,8 @@ impl Bsdf {
     pub fn mode(&self) -> TransportMode {
         match &self.inner {
             Inner::Reference(b) => b.mode,
-            Inner::Diffuse(b) => b.mode,
-            Inner::Model(b) => b.mode,
+            Inner::Diffuse(b) => b.at.mode,
+            Inner::Model(b) => b.at.mode,
         }
     }
 
@@ -142,8 +142,8 @@ impl Bsdf {
     pub fn cos_fixed(&self) -> f32 {
         match &self.inner {
             Inner::Reference(b) => b.cos_fixed(),
-            Inner::Diffuse(b) => b.cos_fixed_geometric.abs(),
-            Inner::Model(b) => b.cos_fixed_geometric.abs(),
+            Inner::Diffuse(b) => b.at.cos_fixed_geometric.abs(),
+            Inner::Model(b) => b.at.cos_fixed_geometric.abs(),
         }
     }
 
@@ -151,8 +151,8 @@ impl Bsdf {
     pub fn fixed_direction(&self) -> Vec3 {
         match &self.inner {
             Inner::Reference(b) => b.fixed_direction(),
-            Inner::Diffuse(b) => b.fixed,
-            Inner::Model(b) => b.fixed,
+            Inner::Diffuse(b) => b.at.fixed,
+            Inner::Model(b) => b.at.fixed,
         }
     }
 

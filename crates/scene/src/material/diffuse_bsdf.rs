@@ -10,13 +10,13 @@
 //! struct is ~100 bytes. Measured on Mitsuba's Cornell box (all `diffuse`), `pt`: see
 //! docs/performance.md, "Per-sample cost on Mitsuba's scenes".
 
-use math::{Frame, INV_PI, PdfW, Vec3, warp};
+use math::{INV_PI, PdfW, Vec3, warp};
 use spectrum::Rgb;
 
 use super::description::Material;
 use super::mixture::positive;
 use super::query::{BsdfEval, BsdfSample, LobeKind, PdfPair};
-use super::shading::{ShadingPoint, TransportMode, consistent, oriented_shading_normal, sides_allowed};
+use super::shading::{FixedFrame, ShadingPoint, TransportMode, consistent, oriented_shading_normal, sides_allowed};
 use crate::texture::TexturePoint;
 
 /// A one-sided Lambertian BSDF `ρ/π` at one hit, for one fixed direction and transport mode.
@@ -24,19 +24,8 @@ use crate::texture::TexturePoint;
 /// normal.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct DiffuseBsdf {
-    /// Shading frame (z = shading normal, on the side of the geometric normal).
-    frame: Frame,
-    /// Unit geometric normal (world).
-    geometric: Vec3,
-    /// Unit fixed direction (world).
-    pub(super) fixed: Vec3,
-    /// Fixed direction in the shading frame.
-    local_fixed: Vec3,
-    /// Signed cosine of the fixed direction with the geometric normal.
-    pub(super) cos_fixed_geometric: f32,
-    pub(super) mode: TransportMode,
-    /// Shading normal equal to the geometric normal: no shading-normal correction.
-    flat: bool,
+    /// Shading frame, geometric normal and fixed direction.
+    pub(super) at: FixedFrame,
     /// Reflectance ρ at the hit.
     reflectance: Rgb,
     /// Russian-roulette continuation probability: the largest channel of ρ, at most 1.
@@ -50,19 +39,14 @@ impl DiffuseBsdf {
     #[inline]
     pub(super) fn new(material: &Material, point: &ShadingPoint, fixed: Vec3, mode: TransportMode) -> Option<Self> {
         let Material::Diffuse { reflectance } = material else { return None };
-        let geometric = point.geometric_normal;
-        let shading = oriented_shading_normal(point);
-        let cos_fixed_geometric = fixed.dot(geometric);
-        let flat = shading == geometric;
-        let frame = ShadingPoint::frame(shading, point.tangent);
-        let local_fixed = frame.to_local(fixed);
+        let at = FixedFrame::new(point, oriented_shading_normal(point), fixed, mode);
         // Lambertian is not relaxed (`LeafModel::follows_shading_normal` is false).
-        if !sides_allowed(false, cos_fixed_geometric, local_fixed.z) {
+        if !sides_allowed(false, at.cos_fixed_geometric, at.local_fixed.z) {
             return None;
         }
         let reflectance = reflectance.eval_at(TexturePoint { uv: point.uv, attribute: point.attribute });
         // The mixture's component weight: 0 from behind (one-sided), else the luminance.
-        let weight = if local_fixed.z <= 0.0 { 0.0 } else { reflectance.luminance() };
+        let weight = if at.local_fixed.z <= 0.0 { 0.0 } else { reflectance.luminance() };
         if !positive(weight) {
             return None;
         }
@@ -70,28 +54,16 @@ impl DiffuseBsdf {
         if !positive(continuation) {
             return None;
         }
-        Some(Self { frame, geometric, fixed, local_fixed, cos_fixed_geometric, mode, flat, reflectance, continuation })
-    }
-
-    /// The shading-normal correction (as [`super::mixture`]'s `shading_factor`).
-    #[inline]
-    fn shading_factor(&self, cos_shading: f32, cos_geometric: f32) -> f32 {
-        if self.flat {
-            return 1.0;
-        }
-        match self.mode {
-            TransportMode::Radiance => (cos_shading / cos_geometric).abs(),
-            TransportMode::Importance => (self.local_fixed.z / self.cos_fixed_geometric).abs(),
-        }
+        Some(Self { at, reflectance, continuation })
     }
 
     /// `ρ/π` for the unit world direction `generated`, in the geometric-normal formulation,
     /// with both solid-angle pdfs; `None` below the surface or for an inconsistent direction.
     #[inline]
     pub(super) fn evaluate(&self, generated: Vec3) -> Option<BsdfEval> {
-        let cos_geometric = generated.dot(self.geometric);
-        let local = self.frame.to_local(generated);
-        if !consistent(cos_geometric, local.z) || self.local_fixed.z <= 0.0 || local.z <= 0.0 {
+        let cos_geometric = generated.dot(self.at.geometric);
+        let local = self.at.frame.to_local(generated);
+        if !consistent(cos_geometric, local.z) || self.at.local_fixed.z <= 0.0 || local.z <= 0.0 {
             return None;
         }
         let value = self.reflectance * INV_PI;
@@ -99,9 +71,9 @@ impl DiffuseBsdf {
             return None;
         }
         Some(BsdfEval {
-            value: value * self.shading_factor(local.z, cos_geometric),
+            value: value * self.at.shading_factor(local.z, cos_geometric),
             cos_generated: cos_geometric.abs(),
-            pdf: PdfPair { forward: PdfW(local.z * INV_PI), reverse: PdfW(self.local_fixed.z * INV_PI) },
+            pdf: PdfPair { forward: PdfW(local.z * INV_PI), reverse: PdfW(self.at.local_fixed.z * INV_PI) },
         })
     }
 
@@ -109,18 +81,7 @@ impl DiffuseBsdf {
     #[inline]
     pub(super) fn sample(&self, u: [f32; 3]) -> Option<BsdfSample> {
         let local = warp::cosine_hemisphere([u[0], u[1]]);
-        let direction = self.frame.to_world(local).normalize();
-        let eval = self.evaluate(direction)?;
-        if !positive(eval.pdf.forward.0) {
-            return None;
-        }
-        Some(BsdfSample {
-            direction,
-            value: eval.value,
-            cos_generated: eval.cos_generated,
-            pdf: eval.pdf,
-            lobe: LobeKind::Diffuse,
-            dispersive: false,
-        })
+        let direction = self.at.frame.to_world(local).normalize();
+        BsdfSample::of_lobe(direction, self.evaluate(direction)?, LobeKind::Diffuse)
     }
 }

@@ -6,7 +6,7 @@
 //! albedo, at most 1). All pdfs it returns are solid-angle densities including the component
 //! and lobe selection probabilities; delta lobes report their selection probability.
 
-use math::{Frame, PdfW, Vec3};
+use math::{PdfW, Vec3};
 use spectrum::Rgb;
 
 use super::MAX_COMPONENTS;
@@ -16,7 +16,7 @@ use super::dispatch::Model;
 use super::lobe::Sampled;
 use super::map_adapter::MapAdapter;
 use super::query::{BsdfEval, BsdfSample, PdfPair};
-use super::shading::{ShadingPoint, TransportMode, consistent, oriented_shading_normal, sides_allowed};
+use super::shading::{FixedFrame, ShadingPoint, TransportMode, consistent, oriented_shading_normal, sides_allowed};
 use crate::texture::TexturePoint;
 
 /// The BSDF of every material but [`Material::Reference`]: a weighted sum of leaf models
@@ -27,19 +27,8 @@ pub(super) struct ModelBsdf {
     /// planes (a material that is one leaf model which follows its shading normal alone,
     /// [`super::dispatch::LeafModel::follows_shading_normal`]: [`sides_allowed`]).
     relaxed: bool,
-    /// Shading frame (z = shading normal, flipped to the side of the geometric normal).
-    frame: Frame,
-    /// Unit geometric normal (world).
-    geometric: Vec3,
-    /// Unit fixed direction (world).
-    pub(super) fixed: Vec3,
-    /// Fixed direction in the shading frame.
-    local_fixed: Vec3,
-    /// Signed cosine of the fixed direction with the geometric normal.
-    pub(super) cos_fixed_geometric: f32,
-    pub(super) mode: TransportMode,
-    /// Shading normal equal to the geometric normal: no shading-normal correction.
-    flat: bool,
+    /// Shading frame, geometric normal and fixed direction.
+    pub(super) at: FixedFrame,
     /// The hit's tangent ([`ShadingPoint::tangent`]), to rebuild the frame about another normal.
     tangent: Vec3,
     /// A normal- or bump-mapped material's per-query adapter (see [`super::map_adapter`]).
@@ -97,7 +86,6 @@ impl ModelBsdf {
     ) -> Option<ModelBsdf> {
         let geometric = point.geometric_normal;
         let mut shading = oriented_shading_normal(point);
-        let cos_fixed_geometric = fixed.dot(geometric);
         // A perturbed normal is mirrored for a camera-side direction below it (in importance
         // mode: for a fixed direction that cannot scatter about it, see `evaluate`).
         let adapter = match material {
@@ -114,15 +102,13 @@ impl ModelBsdf {
         if let Some(a) = adapter {
             shading = a.normal(flipped);
         }
-        let flat = shading == geometric;
-        let frame = ShadingPoint::frame(shading, point.tangent);
-        let local_fixed = frame.to_local(fixed);
+        let at = FixedFrame::new(point, shading, fixed, mode);
         // A material that is one leaf model is that model alone; some follow their shading
         // normal alone (`LeafModel::follows_shading_normal`, `sides_allowed`).
         let uv = TexturePoint { uv: point.uv, attribute: point.attribute };
         let leaf = Model::from_leaf(material, uv, hero, None);
         let relaxed = leaf.is_some_and(|m| m.follows_shading_normal());
-        if !sides_allowed(relaxed, cos_fixed_geometric, local_fixed.z) {
+        if !sides_allowed(relaxed, at.cos_fixed_geometric, at.local_fixed.z) {
             return None;
         }
         let empty = Component {
@@ -133,13 +119,7 @@ impl ModelBsdf {
             lobes: [0.0; 2],
         };
         let mut bsdf = ModelBsdf {
-            frame,
-            geometric,
-            fixed,
-            local_fixed,
-            cos_fixed_geometric,
-            mode,
-            flat,
+            at,
             relaxed,
             tangent: point.tangent,
             adapter,
@@ -161,7 +141,7 @@ impl ModelBsdf {
     /// The lobe and component selection probabilities and the continuation probability for
     /// the fixed direction; `None` when nothing can be selected.
     fn select_lobes(&mut self) -> Option<()> {
-        let local_fixed = self.local_fixed;
+        let local_fixed = self.at.local_fixed;
         let bsdf = self;
         bsdf.delta_probability = 0.0;
         bsdf.non_delta_probability = 0.0;
@@ -200,13 +180,13 @@ impl ModelBsdf {
     fn reframed(&self, flipped: bool) -> Option<ModelBsdf> {
         let adapter = self.adapter?;
         let mut bsdf = *self;
-        bsdf.frame = ShadingPoint::frame(adapter.normal(flipped), self.tangent);
-        bsdf.local_fixed = bsdf.frame.to_local(self.fixed);
-        if !consistent(self.cos_fixed_geometric, bsdf.local_fixed.z) {
+        bsdf.at.frame = ShadingPoint::frame(adapter.normal(flipped), self.tangent);
+        bsdf.at.local_fixed = bsdf.at.frame.to_local(self.at.fixed);
+        if !consistent(self.at.cos_fixed_geometric, bsdf.at.local_fixed.z) {
             return None;
         }
         bsdf.flipped = flipped;
-        bsdf.flat = false;
+        bsdf.at.flat = false;
         bsdf.select_lobes()?;
         Some(bsdf)
     }
@@ -224,7 +204,7 @@ impl ModelBsdf {
                 self.add(second, uv, scale * w, side, hero);
             }
             Material::TwoSided { front, back } => {
-                if self.local_fixed.z * side < 0.0 {
+                if self.at.local_fixed.z * side < 0.0 {
                     self.add(back.as_deref().unwrap_or(front), uv, scale, -side, hero);
                 } else {
                     self.add(front, uv, scale, side, hero);
@@ -255,20 +235,6 @@ impl ModelBsdf {
         }
     }
 
-    /// The factor that turns the shading-frame BSDF into the value in the geometric-normal
-    /// formulation, for a generated direction with shading cosine `cos_shading` and geometric
-    /// cosine `cos_geometric`.
-    #[inline]
-    fn shading_factor(&self, cos_shading: f32, cos_geometric: f32) -> f32 {
-        if self.flat {
-            return 1.0;
-        }
-        match self.mode {
-            TransportMode::Radiance => (cos_shading / cos_geometric).abs(),
-            TransportMode::Importance => (self.local_fixed.z / self.cos_fixed_geometric).abs(),
-        }
-    }
-
     /// Evaluates the BSDF for `generated`. With a map adapter, the camera-side direction picks
     /// the normal and the light-side one the shadowing factor, so that both transport modes
     /// evaluate one BSDF. The sampler in importance mode keeps only directions whose normal is
@@ -281,14 +247,14 @@ impl ModelBsdf {
     pub(super) fn null_transmission(&self) -> Option<Rgb> {
         let mut sum = Rgb::BLACK;
         for c in &self.components[..self.count] {
-            sum += c.model.null_transmission(c.orient(self.local_fixed))? * c.scale;
+            sum += c.model.null_transmission(c.orient(self.at.local_fixed))? * c.scale;
         }
         Some(sum)
     }
 
     pub(super) fn evaluate(&self, generated: Vec3) -> Option<BsdfEval> {
         let Some(adapter) = self.adapter else { return self.evaluate_in_frame(generated) };
-        match self.mode {
+        match self.at.mode {
             TransportMode::Radiance => {
                 let mut eval = self.evaluate_in_frame(generated)?;
                 if adapter.sampler_flips_for(generated) != self.flipped {
@@ -306,7 +272,7 @@ impl ModelBsdf {
                     eval.pdf.forward = PdfW(0.0);
                     eval
                 };
-                eval.value *= adapter.shadowing(self.fixed);
+                eval.value *= adapter.shadowing(self.at.fixed);
                 Some(eval)
             }
         }
@@ -317,8 +283,8 @@ impl ModelBsdf {
         if self.non_delta_probability <= 0.0 {
             return None;
         }
-        let cos_geometric = generated.dot(self.geometric);
-        let local = self.frame.to_local(generated);
+        let cos_geometric = generated.dot(self.at.geometric);
+        let local = self.at.frame.to_local(generated);
         if !consistent(cos_geometric, local.z) {
             return None;
         }
@@ -334,10 +300,10 @@ impl ModelBsdf {
         let mut value = Rgb::BLACK;
         let mut pdf = PdfPair::default();
         for c in &self.components[..self.count] {
-            let fixed = c.orient(self.local_fixed);
+            let fixed = c.orient(self.at.local_fixed);
             let generated = c.orient(local);
             let p_generated = c.model.lobe_probabilities(generated);
-            let e = c.model.evaluate(fixed, generated, self.mode, c.lobes, p_generated);
+            let e = c.model.evaluate(fixed, generated, self.at.mode, c.lobes, p_generated);
             value += e.value * c.scale;
             pdf.forward.0 += c.probability * e.forward;
             let reverse_probability = if self.count == 1 {
@@ -353,7 +319,7 @@ impl ModelBsdf {
             return None;
         }
         Some(BsdfEval {
-            value: value * self.shading_factor(local.z, cos_geometric),
+            value: value * self.at.shading_factor(local.z, cos_geometric),
             cos_generated: cos_geometric.abs(),
             pdf,
         })
@@ -384,39 +350,28 @@ impl ModelBsdf {
         let (index, lobe, probability, pick) = chosen?;
         let c = &self.components[index];
         let rescaled = (pick / probability).clamp(0.0, ONE_MINUS_EPSILON);
-        let sampled = c.model.sample(c.orient(self.local_fixed), lobe, [u[0], u[1], rescaled], self.mode)?;
+        let sampled = c.model.sample(c.orient(self.at.local_fixed), lobe, [u[0], u[1], rescaled], self.at.mode)?;
         match sampled {
             Sampled::Lobe { direction, lobe } => {
-                let direction = self.frame.to_world(c.orient(direction)).normalize();
-                let eval = self.evaluate(direction)?;
-                if !positive(eval.pdf.forward.0) {
-                    return None;
-                }
-                Some(BsdfSample {
-                    direction,
-                    value: eval.value,
-                    cos_generated: eval.cos_generated,
-                    pdf: eval.pdf,
-                    lobe,
-                    dispersive: false,
-                })
+                let direction = self.at.frame.to_world(c.orient(direction)).normalize();
+                BsdfSample::of_lobe(direction, self.evaluate(direction)?, lobe)
             }
             Sampled::Delta { direction, rho, lobe } => {
                 let local = c.orient(direction);
-                let world = self.frame.to_world(local).normalize();
-                let cos_geometric = world.dot(self.geometric);
+                let world = self.at.frame.to_world(local).normalize();
+                let cos_geometric = world.dot(self.at.geometric);
                 if !sides_allowed(self.relaxed, cos_geometric, local.z) || rho.is_black() {
                     return None;
                 }
-                let mut value = rho * (c.scale * self.shading_factor(local.z, cos_geometric) / local.z.abs());
-                match (self.adapter, self.mode) {
+                let mut value = rho * (c.scale * self.at.shading_factor(local.z, cos_geometric) / local.z.abs());
+                match (self.adapter, self.at.mode) {
                     (None, _) => {}
                     (Some(a), TransportMode::Radiance) => value *= a.shadowing(world),
                     (Some(a), TransportMode::Importance) => {
                         if a.flips_for(world) != self.flipped {
                             return None;
                         }
-                        value *= a.shadowing(self.fixed);
+                        value *= a.shadowing(self.at.fixed);
                     }
                 }
                 let pdf = PdfW(probability / total);

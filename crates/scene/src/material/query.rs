@@ -74,6 +74,21 @@ pub struct BsdfSample {
 pub const STRAIGHT_THROUGH_COS: f32 = 1.0 - 1e-6;
 
 impl BsdfSample {
+    /// The sample of a non-delta lobe `lobe` in the unit world `direction`, carrying the BSDF's
+    /// evaluation there (value, cosine and the mixture's pdfs); `None` when its forward pdf is
+    /// not positive.
+    #[inline]
+    pub(super) fn of_lobe(direction: Vec3, eval: BsdfEval, lobe: LobeKind) -> Option<Self> {
+        (eval.pdf.forward.0 > 0.0).then_some(BsdfSample {
+            direction,
+            value: eval.value,
+            cos_generated: eval.cos_generated,
+            pdf: eval.pdf,
+            lobe,
+            dispersive: false,
+        })
+    }
+
     /// True for a specular sample that continues in the direction the ray arrived in, i.e.
     /// along `-fixed` (`fixed`: the unit direction back along the arriving ray), within
     /// [`STRAIGHT_THROUGH_COS`]: a thin dielectric's transmission, or a refraction between

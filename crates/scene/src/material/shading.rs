@@ -71,6 +71,58 @@ pub(super) fn oriented_shading_normal(point: &ShadingPoint) -> Vec3 {
     }
 }
 
+/// The frame a BSDF built on a shading point works in, with its fixed direction: what the
+/// leaf-model mixture and the plain Lambertian share.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct FixedFrame {
+    /// Shading frame (z = shading normal, on the side of the geometric normal).
+    pub frame: Frame,
+    /// Unit geometric normal (world).
+    pub geometric: Vec3,
+    /// Unit fixed direction (world).
+    pub fixed: Vec3,
+    /// Fixed direction in the shading frame.
+    pub local_fixed: Vec3,
+    /// Signed cosine of the fixed direction with the geometric normal.
+    pub cos_fixed_geometric: f32,
+    pub mode: TransportMode,
+    /// Shading normal equal to the geometric normal: no shading-normal correction.
+    pub flat: bool,
+}
+
+impl FixedFrame {
+    /// The frame about the unit `shading` normal (already oriented, e.g. by
+    /// [`oriented_shading_normal`]) with `point`'s tangent, for the unit `fixed` direction.
+    #[inline]
+    pub fn new(point: &ShadingPoint, shading: Vec3, fixed: Vec3, mode: TransportMode) -> Self {
+        let geometric = point.geometric_normal;
+        let frame = ShadingPoint::frame(shading, point.tangent);
+        Self {
+            frame,
+            geometric,
+            fixed,
+            local_fixed: frame.to_local(fixed),
+            cos_fixed_geometric: fixed.dot(geometric),
+            mode,
+            flat: shading == geometric,
+        }
+    }
+
+    /// The factor that turns the shading-frame BSDF into the value in the geometric-normal
+    /// formulation, for a generated direction with shading cosine `cos_shading` and geometric
+    /// cosine `cos_geometric`.
+    #[inline]
+    pub fn shading_factor(&self, cos_shading: f32, cos_geometric: f32) -> f32 {
+        if self.flat {
+            return 1.0;
+        }
+        match self.mode {
+            TransportMode::Radiance => (cos_shading / cos_geometric).abs(),
+            TransportMode::Importance => (self.local_fixed.z / self.cos_fixed_geometric).abs(),
+        }
+    }
+}
+
 /// Which quantity a sub-path carries. The adjoint BSDF differs for refraction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TransportMode {
