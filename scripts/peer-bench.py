@@ -121,13 +121,10 @@ def llvm_variant():
         mi.set_variant("llvm_ad_rgb")
         return mi
     except Exception as first:  # Mitsuba raises ImportError or RuntimeError without LLVM
-        if os.geteuid() != 0 or shutil.which("apt-get") is None:
-            raise Skip(f"Mitsuba's llvm_ad_rgb variant does not load ({first}); install LLVM: "
-                       "apt-get install libllvm19") from first
-    log("Mitsuba's llvm variant needs LLVM: apt-get install -y libllvm19")
-    run(["apt-get", "install", "-y", "-q", "libllvm19"])
-    # Dr.Jit looks for LLVM when it is imported: start again in a fresh interpreter.
-    os.execv(sys.executable, [sys.executable, os.path.abspath(__file__)] + sys.argv[1:])
+        # LLVM 19 was installed above where that is possible (before Dr.Jit was imported):
+        # installing again and restarting would repeat this failure forever.
+        raise Skip(f"Mitsuba's llvm_ad_rgb variant does not load ({first}); it needs LLVM 19: "
+                   "apt-get install libllvm19") from first
 
 
 # ---------------------------------------------------------------------------------------------

@@ -65,8 +65,8 @@ impl Bsdf {
             Material::Reference(m) => {
                 Some(Bsdf { inner: Inner::Reference(ReferenceBsdf::new(m, point.geometric_normal, fixed, mode)?) })
             }
-            Material::Diffuse { .. } => {
-                Some(Bsdf { inner: Inner::Diffuse(DiffuseBsdf::new(material, point, fixed, mode)?) })
+            Material::Diffuse { reflectance } => {
+                Some(Bsdf { inner: Inner::Diffuse(DiffuseBsdf::new(reflectance, point, fixed, mode)?) })
             }
             _ => Self::new_model(material, point, fixed, mode, hero),
         }

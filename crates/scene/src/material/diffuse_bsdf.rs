@@ -13,11 +13,12 @@
 use math::{INV_PI, PdfW, Vec3, warp};
 use spectrum::Rgb;
 
+#[cfg(doc)]
 use super::description::Material;
 use super::mixture::positive;
 use super::query::{BsdfEval, BsdfSample, LobeKind, PdfPair};
 use super::shading::{FixedFrame, ShadingPoint, TransportMode, consistent, oriented_shading_normal, sides_allowed};
-use crate::texture::TexturePoint;
+use crate::texture::{Texture, TexturePoint};
 
 /// A one-sided Lambertian BSDF `ρ/π` at one hit, for one fixed direction and transport mode.
 /// Pdfs are solid-angle densities (1/sr) of the cosine-weighted hemisphere about the shading
@@ -33,12 +34,11 @@ pub(super) struct DiffuseBsdf {
 }
 
 impl DiffuseBsdf {
-    /// The BSDF of `material` (which must be [`Material::Diffuse`]) at `point`; `None` where
-    /// the mixture would return `None`: a grazing fixed direction, one on different sides of
-    /// the geometric and the shading normal, behind the surface, or a black reflectance.
+    /// The BSDF of a [`Material::Diffuse`] with `reflectance` at `point`; `None` where the
+    /// mixture would return `None`: a grazing fixed direction, one on different sides of the
+    /// geometric and the shading normal, behind the surface, or a black reflectance.
     #[inline]
-    pub(super) fn new(material: &Material, point: &ShadingPoint, fixed: Vec3, mode: TransportMode) -> Option<Self> {
-        let Material::Diffuse { reflectance } = material else { return None };
+    pub(super) fn new(reflectance: &Texture, point: &ShadingPoint, fixed: Vec3, mode: TransportMode) -> Option<Self> {
         let at = FixedFrame::new(point, oriented_shading_normal(point), fixed, mode);
         // Lambertian is not relaxed (`LeafModel::follows_shading_normal` is false).
         if !sides_allowed(false, at.cos_fixed_geometric, at.local_fixed.z) {
@@ -63,7 +63,8 @@ impl DiffuseBsdf {
     pub(super) fn evaluate(&self, generated: Vec3) -> Option<BsdfEval> {
         let cos_geometric = generated.dot(self.at.geometric);
         let local = self.at.frame.to_local(generated);
-        if !consistent(cos_geometric, local.z) || self.at.local_fixed.z <= 0.0 || local.z <= 0.0 {
+        // (`local_fixed.z > 0` holds: `new` refuses a fixed direction from behind.)
+        if !consistent(cos_geometric, local.z) || local.z <= 0.0 {
             return None;
         }
         let value = self.reflectance * INV_PI;
