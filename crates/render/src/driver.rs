@@ -393,6 +393,7 @@ fn render_iteration(
     radiance: impl Fn(math::Ray, &mut Rng, u64) -> Rgb + Sync,
 ) -> u64 {
     let width = frame.width as usize;
+    let film_offset = splat_frame::film_offset(seed, iteration);
     let rejected = frame
         .pixels
         .par_chunks_mut(width)
@@ -403,7 +404,7 @@ fn render_iteration(
                 let mut rng = splat_frame::camera_stream(seed, iteration, y * width + x);
                 // Raster position through the filter (weight 1 for the box and when
                 // splatting), then the lens.
-                let primary = scene.camera.sample_primary(x as u32, y as u32, &mut rng);
+                let primary = scene.camera.sample_primary(x as u32, y as u32, film_offset, &mut rng);
                 let value = radiance(primary.ray, &mut rng, (y * width + x) as u64) * primary.weight;
                 *pixel = if value.is_finite() {
                     value

@@ -205,7 +205,7 @@ fn box_filter_is_exact() {
     // A primary ray of the pinhole with the box filter draws two numbers, nothing for a lens.
     let mut a = Rng::new(9, 9);
     let mut b = Rng::new(9, 9);
-    let primary = camera.sample_primary(3, 5, &mut a);
+    let primary = camera.sample_primary(3, 5, [0.25, 0.75], &mut a);
     let u = b.uniform2();
     assert_eq!(primary.ray, camera.generate_ray(Vec2::new(3.0 + u[0], 5.0 + u[1])));
     assert_eq!(a.next_u32(), b.next_u32(), "same random stream position");

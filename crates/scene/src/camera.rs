@@ -295,10 +295,17 @@ impl Camera {
         (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset, weight)
     }
 
-    /// Samples a primary ray for pixel `(x, y)`: two numbers from `rng` for the raster
-    /// position, then two for the lens point if [`Camera::needs_lens_sample`].
-    pub fn sample_primary(&self, x: u32, y: u32, rng: &mut Rng) -> PrimarySample {
-        let (raster, weight) = self.sample_pixel(x, y, rng.uniform2());
+    /// Samples a primary ray for pixel `(x, y)`: the raster position, then two numbers from
+    /// `rng` for the lens point if [`Camera::needs_lens_sample`].
+    ///
+    /// The raster position is `(x, y) + film_offset` when camera samples are splatted
+    /// ([`Camera::splats_camera_samples`]): every pixel of an iteration shares one offset,
+    /// uniform in `[0,1)²`, so each sample is still uniform in its pixel (the estimate stays
+    /// unbiased) while the weight sum a pixel receives from its neighbours is almost constant
+    /// (see `render::splat_frame`). Otherwise it takes two numbers from `rng`.
+    pub fn sample_primary(&self, x: u32, y: u32, film_offset: [f32; 2], rng: &mut Rng) -> PrimarySample {
+        let u = if self.splats_camera_samples() { film_offset } else { rng.uniform2() };
+        let (raster, weight) = self.sample_pixel(x, y, u);
         let ray = if self.needs_lens_sample() {
             self.generate_ray_through_lens(raster, rng.uniform2())
         } else {

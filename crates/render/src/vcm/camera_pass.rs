@@ -86,7 +86,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     let radius = it.pixel_radius(pixel);
     let camera = &scene.camera;
     // Raster position through the filter (its weight starts the throughput), then the lens.
-    let primary = camera.sample_primary(x, y, rng);
+    let primary = camera.sample_primary(x, y, it.film_offset, rng);
     // The start density for MIS: per solid angle for perspective cameras; per area on the
     // film for the orthographic camera, whose first segment then takes no distance factor
     // (like the first segment from an infinite light, §5.2).

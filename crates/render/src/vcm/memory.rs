@@ -86,6 +86,7 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
         pixel_radii: None,
         techniques,
         across_groups: false,
+        film_offset: crate::splat_frame::film_offset(seed, 0),
     };
     let pilot = light_paths.clamp(1, PILOT_PATHS);
     let mut vertices = Vec::new();

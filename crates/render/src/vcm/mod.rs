@@ -279,6 +279,9 @@ pub struct Iteration<'a> {
     /// Camera vertices merge with the light vertices of every wavelength group, each at its
     /// group's wavelengths ([`merge::MergeScope::AcrossGroups`]; spectral mode with groups).
     pub across_groups: bool,
+    /// The raster offset every splatted camera sample of this iteration shares
+    /// ([`crate::splat_frame::film_offset`]).
+    pub film_offset: [f32; 2],
 }
 
 impl Iteration<'_> {
@@ -527,6 +530,7 @@ impl<S: SpectralMode> Engine<S> {
             pixel_radii: self.pixel_footprints.as_ref().map(|_| pixel_radii.as_slice()),
             techniques,
             across_groups: across,
+            film_offset: crate::splat_frame::film_offset(seed, iteration),
         };
         let width = frame.width as usize;
         let sets = WavelengthSource::<S>::new(scene, seed, iteration, techniques.merge, groups, width, pixel_count);
