@@ -334,7 +334,7 @@ mod tests {
         assert!(chi2(&counts) < 112.0, "offsets not uniform: χ² = {}", chi2(&counts));
         assert!(chi2(&confined) > 112.0, "the test cannot see a confined offset: χ² = {}", chi2(&confined));
         for (filter, tolerance) in [(gaussian, 0.03), (Filter::Tent { radius: 1.0 }, 1e-5)] {
-            let camera = camera.clone().with_filter(filter);
+            let camera = camera.with_filter(filter);
             for iteration in 0..64 {
                 let positions = sample_positions(&camera, 9, iteration);
                 let mut values = vec![Rgb::splat(1.0); camera.pixel_count()];
