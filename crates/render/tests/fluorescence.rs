@@ -9,7 +9,7 @@
 //! absorption band, so `a·e = 0` and `Tⁿ Le = ρⁿ Le + n ρⁿ⁻¹ Q (a·Le) e`: the film sees
 //! `Σρⁿ · white + Q (a·Le) Σ nρⁿ⁻¹ · colour(e)`, computed here by quadrature of the CIE tables.
 //! RGB mode replaces `Q·e⊗a` by the 3×3 reradiation matrix `M`, and the answer is
-//! `Σ_{n<K} (ρI + M)ⁿ Le` by matrix powers. Light tracing sees no emitter directly (n ≥ 1).
+//! `Σ_{n<K} (ρI + M)ⁿ Le` by matrix powers (light tracing too: it connects the emitter's point to the camera).
 //! `M` is derived here from its definition ([`derived_rgb_matrix`]: the bands, the RGB →
 //! emission spectrum upsampling, the CIE tables, by our own quadrature), not read from the
 //! production `Fluorescence::rgb_matrix`, which is tested against it.
@@ -231,7 +231,7 @@ fn check(spectral: bool, runs: &[Run]) {
     let alpha = sidak(1e-3, runs.len());
     let mut failures = Vec::new();
     for (index, run) in runs.iter().enumerate() {
-        let first = if run.algorithm == "lt" { 1 } else { 0 };
+        let first = 0;
         let truth = if spectral { spectral_truth(first, max_length) } else { rgb_truth(first, max_length) };
         let common::BlockEstimate { means, std_errors: errors, .. } =
             image_means(run, spectral, max_length, 500 + index as u64);

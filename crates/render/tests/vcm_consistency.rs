@@ -9,8 +9,9 @@
 //! covers the same part of the image, so its mean estimates the same quantity).
 //!
 //! Exclusions (cornell.md §3.9):
-//! * `lt` cannot see emitters directly nor anything through the mirror or glass: only blocks
-//!   whose primary rays all hit non-specular, non-emitting surfaces are compared;
+//! * `lt` cannot see the environment nor anything through the mirror or glass (area emitters
+//!   seen directly it renders, compared with pt in `cameras.rs`): only blocks whose primary
+//!   rays all hit non-specular, non-emitting surfaces are compared;
 //! * `pt` misses every caustic from a delta light (the sun of scene 0, the point light of
 //!   scene 2), which falls on diffuse surfaces all over those scenes: `pt` is not compared
 //!   there at all;

@@ -4,7 +4,9 @@
 //! BSDFs built once per camera sub-path.
 
 use math::{Rng, Vec2, Vec3};
+use scene::camera::CameraConnection;
 use scene::filter::FilmMode;
+use scene::light::EmissionSample;
 use scene::{Bsdf, Scene};
 use spectrum::{Rgb, SpectralMode};
 
@@ -111,8 +113,40 @@ pub fn connect_to_camera<S: SpectralMode>(
             1.0
         }
     };
-    let s = light.path_length + 1;
     let start = splats.len();
+    push_camera_splats(
+        scene,
+        it,
+        &connection,
+        unweighted,
+        camera_pdf_a,
+        weighted,
+        weight_for,
+        light.path_length + 1,
+        splats,
+    );
+    if splats.len() > start && media.is_none() && scene.occluded(position, connection.direction, connection.distance) {
+        splats.truncate(start);
+    }
+}
+
+/// Appends the splats of a camera connection whose contribution before weighting and before the
+/// camera's density is `unweighted` (RGB), `camera_pdf_a` the camera's density of sampling the
+/// point (area) and `weight_for(k)` its MIS weight under the constants `k`; `s` light sub-path
+/// vertices. Where they go depends on the filter and the film (see [`connect_to_camera`]).
+#[allow(clippy::too_many_arguments)]
+fn push_camera_splats(
+    scene: &Scene,
+    it: &Iteration,
+    connection: &CameraConnection,
+    unweighted: Rgb,
+    camera_pdf_a: f32,
+    weighted: bool,
+    weight_for: impl Fn(&MisConstants) -> f32,
+    s: u32,
+    splats: &mut Vec<Splat>,
+) {
+    let camera = &scene.camera;
     if camera.filter.is_box() {
         let Some((pixel, _)) = camera.filter_pixels(connection.raster).next() else { return };
         let k = &it.pixel_constants(pixel as usize);
@@ -143,7 +177,49 @@ pub fn connect_to_camera<S: SpectralMode>(
             splats.push(Splat { target: SplatTarget::Filtered(connection.raster), value, s });
         }
     }
-    if splats.len() > start && media.is_none() && scene.occluded(position, connection.direction, connection.distance) {
+}
+
+/// Light tracing alone (`lt`): the light sub-path's first vertex, on the emitter, connected to
+/// the camera (s = 1, t = 1), so that emitters seen directly appear as they do with Mitsuba's
+/// particle tracer. No other technique of `lt` samples these paths (its camera sub-paths trace
+/// nothing), so the weight is 1; the algorithms with camera sub-paths see emitters by hitting
+/// them (s = 0) and do not call this. The estimate is `L_e(y₀ → camera) · p_cam,A(y₀) /
+/// (p_A(y₀) · N_L)`, `p_A(y₀)` the area density of the emission sample's point (light choice
+/// included, `position_pdf`) and `p_cam,A` the camera's density of sampling `y₀` (area, with the
+/// cosine at the light), as for the other light-tracing splats. Only area and textured-triangle
+/// lights have a point to connect (point-like and infinite lights cannot be seen), and the
+/// connection is not made in scenes with media (their segment would need the transmittance;
+/// `lt` there still leaves emitters seen directly black). The thin lens draws its lens point
+/// from `rng`.
+#[allow(clippy::too_many_arguments)]
+pub fn connect_emitter_to_camera<S: SpectralMode>(
+    scene: &Scene,
+    it: &Iteration,
+    light_index: u32,
+    emission: &EmissionSample,
+    position_pdf: f32,
+    rng: &mut Rng,
+    splats: &mut Vec<Splat>,
+    wavelengths: &S::Wavelengths,
+) {
+    let light = &scene.lights[light_index as usize];
+    if !light.is_finite() || light.is_delta() || scene.media.is_active() || position_pdf.is_nan() || position_pdf <= 0.0
+    {
+        return;
+    }
+    let camera = &scene.camera;
+    let u_lens = if camera.needs_lens_sample() { rng.uniform2() } else { [0.5, 0.5] };
+    let Some(connection) = camera.connect(emission.origin, u_lens) else { return };
+    let Some(seen) =
+        light.radiance_on_hit(-connection.direction, emission.origin, emission.normal, &scene.bounding_sphere)
+    else {
+        return;
+    };
+    let camera_pdf_a = connection.area_pdf(seen.cos_at_light).0;
+    let radiance = scene.emission::<S>(light_index, wavelengths, seen.radiance).to_rgb(wavelengths);
+    let start = splats.len();
+    push_camera_splats(scene, it, &connection, radiance / position_pdf, camera_pdf_a, false, |_| 1.0, 1, splats);
+    if splats.len() > start && scene.occluded(emission.origin, connection.direction, connection.distance) {
         splats.truncate(start);
     }
 }

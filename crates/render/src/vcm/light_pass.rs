@@ -8,7 +8,7 @@ use spectrum::SpectralMode;
 use crate::fluorescent::FluorescentVertex;
 
 use super::Iteration;
-use super::connect::{LightEnd, Splat, connect_to_camera};
+use super::connect::{LightEnd, Splat, connect_emitter_to_camera, connect_to_camera};
 use super::light_vertex::{LightVertex, VertexData};
 use super::medium::{Arrival, Flight, MediumSide, Scatterer, advance};
 use super::mis::SubPathMis;
@@ -45,6 +45,10 @@ pub fn trace_light_path<S: SpectralMode>(
     let direct_pdf = emission.direct_pdf.0 * pick;
     if emission_pdf.is_nan() || emission_pdf <= 0.0 || emission.energy.is_black() {
         return;
+    }
+    // Light tracing alone shows the emitters seen directly by connecting y₀ (s = 1, t = 1).
+    if techniques.light_trace_only && it.max_length >= 1 {
+        connect_emitter_to_camera::<S>(scene, it, index, &emission, direct_pdf, &mut camera_rng, splats, wavelengths);
     }
     let media_active = scene.media.is_active();
     let cos_used = if light.is_finite() { emission.cos_at_light } else { 1.0 };

@@ -8,7 +8,9 @@
 //! one camera sub-path per pixel. A full path reaches the image in one of six ways:
 //!
 //! 1. **light tracing** (t = 1): a light vertex connected to the camera, splatted into the pixel
-//!    it projects to ([`connect::connect_to_camera`]);
+//!    it projects to ([`connect::connect_to_camera`]); with light tracing alone (`lt`), also the
+//!    emitter's own point (s = 1, [`connect::connect_emitter_to_camera`]), so that `lt` shows
+//!    emitters seen directly, which the other algorithms get from emitter hits;
 //! 2. **emitter hit** (s = 0): a camera sub-path hits an emitter or escapes to the environment;
 //! 3. **next-event estimation** (s = 1): a camera vertex connected to a point sampled on a
 //!    light ([`connect::next_event`]);

@@ -6,7 +6,9 @@
 //! in Veach's thesis and the VCM tech report; the path has `s + t − 1` segments.
 //!
 //! - `s = 0`: the camera sub-path hits an emitter or escapes to the environment (the emitter or
-//!   environment vertex is `z_{t−1}`), so a light seen directly is `s0-t2`;
+//!   environment vertex is `z_{t−1}`), so a light seen directly is `s0-t2` (light tracing
+//!   alone finds these paths as `s = 1, t = 1` and files them under the same image, the only
+//!   one of length 1);
 //! - `s = 1`: next-event estimation at camera vertex `z_{t−2}`;
 //! - `t = 1`: light tracing, light vertex `y_{s−1}` connected to the camera;
 //! - `s, t ≥ 2`: vertex connection of `y_{s−1}` and `z_{t−1}`.
@@ -143,11 +145,13 @@ impl TechniqueLayout {
         } else {
             debug_assert!(
                 matches!((family, s, t), (Family::EmitterHit, 0, 2..) | (Family::NextEvent, 1, 2..))
-                    || matches!((family, s, t), (Family::LightTracing, 2.., 1) | (Family::Connection, 2.., 2..)),
+                    || matches!((family, s, t), (Family::LightTracing, 1.., 1) | (Family::Connection, 2.., 2..)),
                 "no {family:?} technique with s = {s}, t = {t}"
             );
             let k = (s + t).saturating_sub(1);
-            if k > n || (k == 1 && s != 0) || t == 0 {
+            // Length 1 has one image: the camera sees an emitter (s = 0, t = 2, or light tracing
+            // alone connecting the emitter's point, s = 1, t = 1).
+            if k > n || (k == 1 && s > 1) || t == 0 {
                 return longer;
             }
             let k = k as usize;

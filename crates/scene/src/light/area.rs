@@ -210,6 +210,7 @@ impl AreaLight {
         let local = warp::cosine_hemisphere(u_direction);
         let cos_at_light = local.z;
         EmissionSample {
+            normal,
             energy: self.radiance * cos_at_light,
             origin,
             direction: Frame::from_z(normal).to_world(local),

@@ -1,6 +1,6 @@
 //! The constant environment.
 
-use math::{Frame, PdfA, PdfW, warp};
+use math::{Frame, PdfA, PdfW, Vec3, warp};
 use spectrum::Rgb;
 
 use super::{BoundingSphere, DirectSample, EmissionSample, HitRadiance, disc_origin, disc_pdf};
@@ -35,6 +35,7 @@ impl BackgroundLight {
     ) -> EmissionSample {
         let direction = warp::uniform_sphere(u_direction);
         EmissionSample {
+            normal: Vec3::ZERO,
             energy: self.radiance,
             origin: disc_origin(&Frame::from_z(direction), u_position, sphere),
             direction,

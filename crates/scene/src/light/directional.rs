@@ -39,6 +39,7 @@ impl DirectionalLight {
     /// A light sub-path start on the bounding-sphere disc.
     pub(super) fn sample_emission(&self, u_position: [f32; 2], sphere: &BoundingSphere) -> EmissionSample {
         EmissionSample {
+            normal: Vec3::ZERO,
             energy: self.irradiance,
             origin: disc_origin(&self.frame, u_position, sphere),
             direction: self.direction,

@@ -266,6 +266,7 @@ impl EnvMapLight {
         // The light travels away from the sampled environment direction.
         let Some((towards_light, radiance, pdf)) = self.sample(u_direction) else {
             return EmissionSample {
+                normal: Vec3::ZERO,
                 energy: Rgb::BLACK,
                 origin: sphere.center,
                 direction: Vec3::Z,
@@ -276,6 +277,7 @@ impl EnvMapLight {
         };
         let direction = -towards_light;
         EmissionSample {
+            normal: Vec3::ZERO,
             energy: radiance,
             origin: disc_origin(&Frame::from_z(direction), u_position, sphere),
             direction,

@@ -127,6 +127,7 @@ impl GoniometricLight {
         // Intensity and density evaluated from the direction, as sample_direct does.
         let (energy, pdf) = self.emitted(direction);
         EmissionSample {
+            normal: Vec3::ZERO,
             energy,
             origin: self.position,
             direction,

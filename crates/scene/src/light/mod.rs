@@ -118,6 +118,9 @@ pub struct EmissionSample {
     pub direct_pdf: PdfA,
     /// Cosine at the light (1 without a surface).
     pub cos_at_light: f32,
+    /// Unit front normal at `origin` for lights on a surface (area and textured-triangle
+    /// lights; for spheres oriented like the emitting side), zero for the others.
+    pub normal: Vec3,
 }
 
 /// Result of [`Light::radiance_on_hit`].

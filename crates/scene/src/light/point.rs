@@ -34,6 +34,7 @@ impl PointLight {
     /// A light sub-path start: a uniform direction on the sphere.
     pub(super) fn sample_emission(&self, u_direction: [f32; 2]) -> EmissionSample {
         EmissionSample {
+            normal: Vec3::ZERO,
             energy: self.intensity,
             origin: self.position,
             direction: warp::uniform_sphere(u_direction),

@@ -188,6 +188,7 @@ impl ProjectorLight {
         // Density and intensity evaluated from the direction, as sample_direct does.
         let (energy, pdf) = self.emitted(local).unwrap_or((Rgb::BLACK, 0.0));
         EmissionSample {
+            normal: Vec3::ZERO,
             energy,
             origin: self.position,
             direction: self.frame.to_world(local),

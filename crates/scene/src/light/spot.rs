@@ -200,6 +200,7 @@ impl SpotLight {
             Some(_) => self.intensity * self.falloff(cos_theta) * self.texture_at(local),
         };
         EmissionSample {
+            normal: Vec3::ZERO,
             energy,
             origin: self.position,
             direction: self.frame.to_world(local),

@@ -157,6 +157,7 @@ impl TexturedTriangleLight {
         let local = warp::cosine_hemisphere(u_direction);
         let cos_at_light = local.z;
         EmissionSample {
+            normal: self.triangle.normal,
             energy: radiance * cos_at_light,
             origin,
             direction: Frame::from_z(self.triangle.normal).to_world(local),
