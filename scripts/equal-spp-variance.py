@@ -9,6 +9,10 @@ ours / Mitsuba, and the same split into the pixels that see an emitter (mean abo
 --emitter-threshold, dilated by 4 pixels) and the rest. Counts only, no timing: what it measures
 is the estimators' noise per sample, independent of speed (docs/film.md).
 
+Give --resolution the aspect ratio of the file's film: at another shape the two renderers frame
+the scene differently (on matpreview, 683x512, a 128x128 film gave channel means 0.93-1.04x
+Mitsuba's; 171x128 gives 0.999-1.000x).
+
 Run it with a Python that has `mitsuba` and `numpy` (scripts/peer-bench.py creates one in
 target/peer-bench/venv; the llvm variants need `apt-get install libllvm19`), from the repository
 root after `cargo build --release`:
@@ -60,7 +64,7 @@ def dilate(mask, steps, np):
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("scene", help="a Mitsuba 3 XML file")
-    parser.add_argument("--resolution", type=int, default=128, help="square film size [128]")
+    parser.add_argument("--resolution", default="128", help="film size, N (square) or WxH [128]")
     parser.add_argument("--spp", type=int, default=64, help="samples per pixel of each render [64]")
     parser.add_argument("--seeds", type=int, default=6, help="renders per renderer [6]")
     parser.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant [llvm_ad_rgb]")
@@ -77,12 +81,12 @@ def main():
     if not os.path.exists(args.vcm):
         sys.exit(f"{args.vcm} not found: run `cargo build --release` first")
     mi.set_variant(args.variant)
-    res = args.resolution
+    width, height = (int(v) for v in (args.resolution.split("x") * 2)[:2])
     theirs = []
     for seed in range(1, args.seeds + 1):
         scene = mi.load_file(args.scene, spp=args.spp)
         film = mi.traverse(scene.sensors()[0].film())
-        film["size"] = [res, res]
+        film["size"] = [width, height]
         film.update()
         theirs.append(np.array(mi.render(scene, seed=seed), dtype=np.float64)[..., :3])
     theirs = np.array(theirs)
@@ -91,12 +95,12 @@ def main():
         for seed in range(1, args.seeds + 1):
             out = os.path.join(tmp, f"pt{seed}.pfm")
             command = [args.vcm, "render", "--scene", args.scene, "-a", "pt", "-i", str(args.spp),
-                       "-r", f"{res}x{res}", "--seed", str(seed), "-o", out, "--quiet"] + args.extra.split()
+                       "-r", f"{width}x{height}", "--seed", str(seed), "-o", out, "--quiet"] + args.extra.split()
             subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
             ours.append(read_pfm(out, np))
     ours = np.array(ours)
     emitters = dilate(theirs.mean(axis=0).sum(axis=2) > args.emitter_threshold, 4, np)
-    print(f"{args.scene}: {res}x{res}, {args.spp} spp, {args.seeds} seeds; relative variance Σvar/Σmean²")
+    print(f"{args.scene}: {width}x{height}, {args.spp} spp, {args.seeds} seeds; relative variance Σvar/Σmean²")
     print("| pixels | count | Mitsuba 3 `path` | ours `pt` | ours / Mitsuba |")
     print("|---|---:|---:|---:|---:|")
     for name, mask in [("all", np.ones_like(emitters)), ("seeing an emitter", emitters), ("the rest", ~emitters)]:
