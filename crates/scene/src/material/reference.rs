@@ -172,19 +172,8 @@ impl ReferenceBsdf {
             // Evaluate the world direction exactly as `evaluate` would, so that a sample and
             // the evaluation of its direction always agree (also at the horizon).
             let direction = self.frame.to_world(local);
-            let eval = self.evaluate(direction)?;
-            if eval.pdf.forward.0 <= 0.0 {
-                return None;
-            }
             let lobe = if pick < p.diffuse { LobeKind::Diffuse } else { LobeKind::Glossy };
-            return Some(BsdfSample {
-                direction,
-                value: eval.value,
-                cos_generated: eval.cos_generated,
-                pdf: eval.pdf,
-                lobe,
-                dispersive: false,
-            });
+            return BsdfSample::of_lobe(direction, self.evaluate(direction)?, lobe);
         }
         if pick < p.diffuse + p.phong + p.reflect {
             return Some(self.sample_reflection(p.reflect));
