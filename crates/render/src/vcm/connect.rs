@@ -113,27 +113,18 @@ pub fn connect_to_camera<S: SpectralMode>(
             1.0
         }
     };
-    let start = splats.len();
-    push_camera_splats(
-        scene,
-        it,
-        &connection,
-        unweighted,
-        camera_pdf_a,
-        weighted,
-        weight_for,
-        light.path_length + 1,
-        splats,
-    );
-    if splats.len() > start && media.is_none() && scene.occluded(position, connection.direction, connection.distance) {
-        splats.truncate(start);
-    }
+    // With media the segment's transmittance already accounts for what blocks it.
+    let shadow_from = media.is_none().then_some(position);
+    let s = light.path_length + 1;
+    push_camera_splats(scene, it, &connection, unweighted, camera_pdf_a, weighted, weight_for, s, shadow_from, splats);
 }
 
 /// Appends the splats of a camera connection whose contribution before weighting and before the
 /// camera's density is `unweighted` (RGB), `camera_pdf_a` the camera's density of sampling the
 /// point (area) and `weight_for(k)` its MIS weight under the constants `k`; `s` light sub-path
-/// vertices. Where they go depends on the filter and the film (see [`connect_to_camera`]).
+/// vertices. Where they go depends on the filter and the film (see [`connect_to_camera`]). With
+/// `shadow_from`, the segment from that point to the camera is then tested, and the splats are
+/// taken back if it is blocked (no shadow ray when nothing was splatted).
 #[allow(clippy::too_many_arguments)]
 fn push_camera_splats(
     scene: &Scene,
@@ -144,8 +135,10 @@ fn push_camera_splats(
     weighted: bool,
     weight_for: impl Fn(&MisConstants) -> f32,
     s: u32,
+    shadow_from: Option<Vec3>,
     splats: &mut Vec<Splat>,
 ) {
+    let start = splats.len();
     let camera = &scene.camera;
     if camera.filter.is_box() {
         let Some((pixel, _)) = camera.filter_pixels(connection.raster).next() else { return };
@@ -176,6 +169,12 @@ fn push_camera_splats(
         if !value.is_black() {
             splats.push(Splat { target: SplatTarget::Filtered(connection.raster), value, s });
         }
+    }
+    if let Some(point) = shadow_from
+        && splats.len() > start
+        && scene.occluded(point, connection.direction, connection.distance)
+    {
+        splats.truncate(start);
     }
 }
 
@@ -217,11 +216,8 @@ pub fn connect_emitter_to_camera<S: SpectralMode>(
     };
     let camera_pdf_a = connection.area_pdf(seen.cos_at_light).0;
     let radiance = scene.emission::<S>(light_index, wavelengths, seen.radiance).to_rgb(wavelengths);
-    let start = splats.len();
-    push_camera_splats(scene, it, &connection, radiance / position_pdf, camera_pdf_a, false, |_| 1.0, 1, splats);
-    if splats.len() > start && scene.occluded(emission.origin, connection.direction, connection.distance) {
-        splats.truncate(start);
-    }
+    let value = radiance / position_pdf;
+    push_camera_splats(scene, it, &connection, value, camera_pdf_a, false, |_| 1.0, 1, Some(emission.origin), splats);
 }
 
 /// The end of a light sub-path being connected to the camera.
