@@ -4,7 +4,7 @@
 use super::table::Provenance;
 
 /// Collects the provenance of the current run; `budget` describes the per-render budget.
-pub fn collect(budget: &str, reference_spp: f64) -> Provenance {
+pub fn collect(budget: &str, reference_spp: f64, escalation: u64) -> Provenance {
     Provenance {
         date: utc_now(),
         commit: commit(),
@@ -12,6 +12,7 @@ pub fn collect(budget: &str, reference_spp: f64) -> Provenance {
         command: std::env::args().collect::<Vec<_>>().join(" "),
         budget: budget.to_string(),
         reference_spp,
+        escalation,
     }
 }
 

@@ -19,10 +19,21 @@ pub enum SceneStatus {
 /// The result of one algorithm on one scene.
 #[derive(Clone, Debug)]
 pub enum Outcome {
-    /// Rendered with this many iterations (samples per pixel) and judged.
-    Judged { iterations: u64, verdict: Verdict },
+    /// Rendered with this many iterations (samples per pixel) and judged. `first` is set when
+    /// this is the escalated render of a cell whose render at the scene's budget failed: that
+    /// first render's iterations and verdict.
+    Judged { iterations: u64, verdict: Verdict, first: Option<Box<FirstTry>> },
     /// Rendering or comparing failed (or panicked): the first line of the error.
     Failed(String),
+}
+
+/// The failed render at the scene's budget that an escalated render replaced.
+#[derive(Clone, Debug)]
+pub struct FirstTry {
+    /// Its iterations (samples per pixel).
+    pub iterations: u64,
+    /// Its verdict (a FAIL).
+    pub verdict: Verdict,
 }
 
 /// The whole run.
@@ -35,21 +46,25 @@ pub struct Table {
 }
 
 impl Table {
-    /// Counts `(scenes, loaded, passed per algorithm)`.
-    pub fn counts(&self) -> (usize, usize, Vec<usize>) {
+    /// Counts `(scenes, loaded, passed per algorithm, of those passed by an escalated render)`.
+    pub fn counts(&self) -> (usize, usize, Vec<usize>, Vec<usize>) {
         let mut loaded = 0;
         let mut passed = vec![0; self.algorithms.len()];
+        let mut escalated = vec![0; self.algorithms.len()];
         for (_, status) in &self.rows {
             if let SceneStatus::Rendered(outcomes) = status {
                 loaded += 1;
-                for (count, outcome) in passed.iter_mut().zip(outcomes) {
-                    if matches!(outcome, Outcome::Judged { verdict, .. } if verdict.passed) {
+                for ((count, late), outcome) in passed.iter_mut().zip(escalated.iter_mut()).zip(outcomes) {
+                    if let Outcome::Judged { verdict, first, .. } = outcome
+                        && verdict.passed
+                    {
                         *count += 1;
+                        *late += usize::from(first.is_some());
                     }
                 }
             }
         }
-        (self.rows.len(), loaded, passed)
+        (self.rows.len(), loaded, passed, escalated)
     }
 
     /// Rows as cells: scene, loads, one per algorithm.
@@ -86,8 +101,13 @@ impl Table {
     }
 
     fn summary_line(&self) -> String {
-        let (scenes, loaded, passed) = self.counts();
-        let passes: Vec<String> = self.algorithms.iter().zip(&passed).map(|(a, p)| format!("{a} {p}")).collect();
+        let (scenes, loaded, passed, escalated) = self.counts();
+        let passes: Vec<String> = self
+            .algorithms
+            .iter()
+            .zip(passed.iter().zip(&escalated))
+            .map(|(a, (p, e))| if *e == 0 { format!("{a} {p}") } else { format!("{a} {p} ({e} of them escalated)") })
+            .collect();
         format!("{scenes} scenes, {loaded} load and render; passed: {}", passes.join(", "))
     }
 
@@ -154,6 +174,24 @@ impl Table {
             100.0 * criteria.mean_tolerance,
             criteria.mean_alpha
         );
+        if provenance.escalation > 1 {
+            let _ = writeln!(
+                md,
+                "A cell that fails is rendered once more, with another seed, at {0}× the budget, and \
+                 the cell shows that render's verdict with the first one's after it. This is not a \
+                 second chance for a wrong image: a bias that fails the first test is more likely to \
+                 fail the second, because the render's standard error falls by √{0} while the bias \
+                 stays; the retry adds to a biased render's chance of passing at most the chance \
+                 that the {0}× render passes, which falls with the budget. What it forgives is a \
+                 variance estimate that is too small at the first budget: where a contribution \
+                 arrives as rare large samples (light reaching a wall only through a bounce off a \
+                 small bright spot), most pixels see none of them in a few dozen iterations, so \
+                 their mean sits below the truth with an estimated variance too small to cover it \
+                 (the Z-test assumes the pixel mean is nearly normal, which such pixels are not \
+                 yet). `--escalate 1` turns this off.\n",
+                provenance.escalation
+            );
+        }
         let _ = writeln!(md, "## Results\n");
         let header = self.header();
         let _ = writeln!(md, "| {} |", header.join(" | "));
@@ -202,20 +240,35 @@ pub struct Provenance {
     pub budget: String,
     /// Samples per pixel assumed for the references.
     pub reference_spp: f64,
+    /// The budget factor of the escalated render of a failing cell (1: none).
+    pub escalation: u64,
 }
 
-/// One algorithm's cell: `PASS 99.96% ×1.0021 ±0.08% (868 spp)`.
+/// One algorithm's cell: `PASS 99.96% ×1.0021 ±0.08% (868 spp)`, and for an escalated render
+/// `PASS 99.94% ×1.0005 ±0.02% (1024 spp; at 64 spp: FAIL 97.27% ×1.0011 ±0.09%)`.
 fn cell(outcome: &Outcome) -> String {
     match outcome {
-        Outcome::Judged { iterations, verdict } => format!(
-            "{} {:.2}% ×{:.4} ±{:.2}% ({iterations} spp)",
-            if verdict.passed { "PASS" } else { "FAIL" },
-            100.0 * verdict.pass_fraction(),
-            verdict.worst_mean_ratio(),
-            100.0 * verdict.largest_mean_error()
-        ),
+        Outcome::Judged { iterations, verdict, first } => {
+            let mut text = format!("{} ({iterations} spp", verdict_words(verdict));
+            if let Some(first) = first {
+                let _ = write!(text, "; at {} spp: {}", first.iterations, verdict_words(&first.verdict));
+            }
+            text + ")"
+        }
         Outcome::Failed(error) => format!("error: {error}"),
     }
+}
+
+/// `PASS 99.96% ×1.0021 ±0.08%`: the verdict, the passing fraction, the worst mean ratio and the
+/// largest relative standard error of a channel mean's difference.
+fn verdict_words(verdict: &Verdict) -> String {
+    format!(
+        "{} {:.2}% ×{:.4} ±{:.2}%",
+        if verdict.passed { "PASS" } else { "FAIL" },
+        100.0 * verdict.pass_fraction(),
+        verdict.worst_mean_ratio(),
+        100.0 * verdict.largest_mean_error()
+    )
 }
 
 #[cfg(test)]
@@ -243,7 +296,7 @@ mod tests {
                 (
                     "g/a".into(),
                     SceneStatus::Rendered(vec![
-                        Outcome::Judged { iterations: 64, verdict: verdict(true, 999) },
+                        Outcome::Judged { iterations: 64, verdict: verdict(true, 999), first: None },
                         Outcome::Failed("render panicked".into()),
                     ]),
                 ),
@@ -251,7 +304,7 @@ mod tests {
                 ("participating_media/c".into(), SceneStatus::NoReference),
             ],
         };
-        assert_eq!(table.counts(), (3, 1, vec![1, 0]));
+        assert_eq!(table.counts(), (3, 1, vec![1, 0], vec![0, 0]));
         let text = table.plain();
         assert!(text.contains("PASS 99.90% ×1.0100 ±0.20% (64 spp)"), "{text}");
         assert!(text.contains("error: render panicked") && text.contains("no reference"), "{text}");
@@ -264,10 +317,38 @@ mod tests {
             command: "vcm conformance x".into(),
             budget: "b".into(),
             reference_spp: 32000.0,
+            escalation: 16,
         };
         let md = table.markdown(&provenance, &Criteria::MITSUBA);
         assert!(md.contains("| g/a | yes | PASS 99.90% ×1.0100 ±0.20% (64 spp) | error: render panicked |"), "{md}");
         assert!(md.contains("| g/b | no | - | - |") && md.contains("- commit: abc"), "{md}");
         assert!(md.contains("mitsuba-renderer/mitsuba-data") && md.contains("../../common"), "{md}");
+        assert!(md.contains("at 16× the budget"), "the rule names the escalation: {md}");
+    }
+
+    #[test]
+    fn an_escalated_cell_shows_both_verdicts_and_is_counted() {
+        let escalated = Outcome::Judged {
+            iterations: 1024,
+            verdict: verdict(true, 999),
+            first: Some(Box::new(FirstTry { iterations: 64, verdict: verdict(false, 972) })),
+        };
+        let failed_twice = Outcome::Judged {
+            iterations: 1024,
+            verdict: verdict(false, 990),
+            first: Some(Box::new(FirstTry { iterations: 64, verdict: verdict(false, 972) })),
+        };
+        let table = Table {
+            algorithms: vec!["pt".into(), "vcm".into()],
+            rows: vec![("g/a".into(), SceneStatus::Rendered(vec![escalated, failed_twice]))],
+        };
+        assert_eq!(table.counts(), (1, 1, vec![1, 0], vec![1, 0]));
+        let text = table.plain();
+        assert!(
+            text.contains("PASS 99.90% ×1.0100 ±0.20% (1024 spp; at 64 spp: FAIL 97.20% ×1.0100 ±0.20%)"),
+            "{text}"
+        );
+        assert!(text.contains("FAIL 99.00% ×1.0100 ±0.20% (1024 spp; at 64 spp: FAIL 97.20%"), "{text}");
+        assert!(text.contains("passed: pt 1 (1 of them escalated), vcm 0"), "{text}");
     }
 }
