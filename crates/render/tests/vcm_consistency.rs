@@ -46,10 +46,10 @@
 
 mod common;
 
-use common::{BlockEstimate, BlockView, block_estimate, block_views, detectable_bias, settings};
+use common::comparison::Comparison;
+use common::{BlockEstimate, BlockView, block_estimate, block_views, settings};
 use render::RenderSettings;
 use scene::{Scene, cornell};
-use testkit::{ZTestOutcome, z_test_entries};
 
 /// Reference resolution (square).
 const RESOLUTION: u32 = 32;
@@ -96,69 +96,6 @@ fn comparable(algorithm: &str, mask: u32, view: &BlockView, radius: f32) -> bool
     lt_ok && delta_ok && edge_ok
 }
 
-/// The entries of the blocks `keep` selects (3 per block), then the 3 channel means pooled over
-/// those blocks (which see a bias common to the blocks far more sharply than one block does).
-fn entries(estimate: &BlockEstimate, keep: &[bool]) -> (Vec<f64>, Vec<f64>) {
-    let mut means = Vec::new();
-    let mut errors = Vec::new();
-    for (b, _) in keep.iter().enumerate().filter(|(_, k)| **k) {
-        means.extend_from_slice(&estimate.means[b * 3..b * 3 + 3]);
-        errors.extend_from_slice(&estimate.std_errors[b * 3..b * 3 + 3]);
-    }
-    let (pooled, pooled_errors) = estimate.pooled(keep);
-    means.extend(pooled);
-    errors.extend(pooled_errors);
-    (means, errors)
-}
-
-/// One comparison of a test: its description, outcome, and the smallest relative bias of the
-/// tested estimate the same test rejects.
-struct Comparison {
-    what: String,
-    outcome: ZTestOutcome,
-    detectable: f64,
-}
-
-impl Comparison {
-    /// Compares `a` with the reference `b` on the blocks of `views` that `keep` selects, at
-    /// per-comparison level `alpha`; checks that the test has power (enough blocks, means far
-    /// from zero).
-    fn new(
-        what: String,
-        a: &BlockEstimate,
-        b: &BlockEstimate,
-        views: &[BlockView],
-        keep: impl Fn(&BlockView) -> bool,
-        alpha: f64,
-    ) -> Self {
-        let keep: Vec<bool> = views.iter().map(keep).collect();
-        let blocks = keep.iter().filter(|k| **k).count();
-        let (am, ae) = entries(a, &keep);
-        let (bm, be) = entries(b, &keep);
-        let outcome = z_test_entries(&am, &ae, &bm, &be, alpha);
-        let detectable = detectable_bias(&am, &ae, &bm, &be, alpha);
-        // Power: many blocks, bright enough that a few % error is many standard errors.
-        assert!(blocks >= 16, "{what}: only {blocks} blocks compared");
-        let mean = bm.iter().sum::<f64>() / bm.len() as f64;
-        let error = (be.iter().chain(&ae).map(|e| e * e).sum::<f64>() / bm.len() as f64).sqrt();
-        assert!(mean > 0.02 && error < 0.25 * mean, "{what}: mean {mean}, typical error {error}");
-        let worst_block = outcome.worst_index / 3;
-        let worst = if worst_block < blocks {
-            let block = keep.iter().enumerate().filter(|(_, k)| **k).nth(worst_block).unwrap().0;
-            format!("block ({}, {})", block % GRID as usize, block / GRID as usize)
-        } else {
-            "the pooled mean".to_string()
-        };
-        let what = format!(
-            "{what} ({blocks} blocks, worst: {worst} channel {}; detects a bias of {:.1} %)",
-            outcome.worst_index % 3,
-            100.0 * detectable
-        );
-        eprintln!("{what}: {outcome}");
-        Self { what, outcome, detectable }
-    }
-}
-
 /// Runs the comparisons of `algorithms` against a long `bpt` run on each scene of `masks`,
 /// and of that `bpt` run against a long `pt` run on the scenes without delta lights. Panics
 /// listing every failed comparison, and every comparison that cannot detect a relative bias
@@ -196,12 +133,20 @@ fn check(
                 None => {
                     let a = estimate(mask, plan, 2, spectral);
                     let what = format!("scene {mask}: {} vs bpt", plan.algorithm);
-                    Comparison::new(what, &a, &bpt, &views, |v| comparable(plan.algorithm, mask, v, radius), alpha)
+                    Comparison::new(
+                        what,
+                        &a,
+                        &bpt,
+                        &views,
+                        |v| comparable(plan.algorithm, mask, v, radius),
+                        alpha,
+                        0.02,
+                    )
                 }
                 Some(pt) => {
                     let p = estimate(mask, pt, 3, spectral);
                     let what = format!("scene {mask}: bpt vs pt");
-                    Comparison::new(what, &bpt, &p, &views, |_| true, alpha)
+                    Comparison::new(what, &bpt, &p, &views, |_| true, alpha, 0.02)
                 }
             };
             if !result.outcome.passed {

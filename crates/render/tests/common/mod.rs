@@ -3,11 +3,11 @@
 
 #![allow(dead_code)]
 
+pub mod comparison;
 pub mod medium_sphere;
 pub mod sphere_room;
 
-use math::Vec2;
-use math::Vec3;
+use math::{RAY_EPSILON, Ray, Vec2, Vec3};
 use render::driver::{Budget, Renderer};
 use render::{Algorithm, RenderSettings};
 use scene::light::AreaLight;
@@ -177,14 +177,15 @@ fn distance_to_triangle(p: Vec3, t: &Triangle) -> f32 {
     (p - (a + ab * (vb * denominator) + ac * (vc * denominator))).length()
 }
 
-/// Distance from `p` (on primitive `own`) to the nearest other primitive not in its plane.
+/// Distance from `p` (on primitive `own`) to the nearest other primitive not in its plane,
+/// leaving out index-matched (null) boundaries of media: no photon is stored on them.
 fn clearance(scene: &Scene, p: Vec3, own: usize) -> f32 {
     let own_shape = scene.primitives[own].shape;
     scene
         .primitives
         .iter()
         .enumerate()
-        .filter(|(i, _)| *i != own)
+        .filter(|(i, other)| *i != own && !scene.media.is_null(other.material))
         .map(|(_, other)| match (other.shape, own_shape) {
             (Shape::Triangle(t), Shape::Triangle(o))
                 if t.normal.dot(o.normal) > 0.9999 && (t.p0 - o.p0).dot(o.normal).abs() < 1e-5 =>
@@ -210,8 +211,15 @@ pub fn block_views(scene: &Scene, block: u32) -> Vec<BlockView> {
             for sy in 0..4 {
                 for sx in 0..4 {
                     let raster = Vec2::new(x as f32 + (sx as f32 + 0.5) / 4.0, y as f32 + (sy as f32 + 0.5) / 4.0);
-                    let ray = scene.camera.generate_ray(raster);
-                    match scene.intersect(&ray) {
+                    let mut ray = scene.camera.generate_ray(raster);
+                    // Index-matched (null) boundaries of media are no surfaces to look at: the
+                    // block sees what lies behind them.
+                    let mut found = scene.intersect(&ray);
+                    while let Some(hit) = found.as_ref().filter(|h| scene.media.is_null(h.material)) {
+                        ray = Ray::new(hit.position + RAY_EPSILON * ray.direction, ray.direction);
+                        found = scene.intersect(&ray);
+                    }
+                    match found {
                         None => view.emitter_or_background = true,
                         Some(hit) => {
                             if hit.light.is_some() {

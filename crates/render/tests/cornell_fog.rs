@@ -1,0 +1,120 @@
+//! Light tracing and photon mapping against a long `bpt` render per block on the fog-filled Cornell
+//! box of issue #15 (`scenes/cornell-fog.xml`, loaded as a user's file is: a spot light shining
+//! down through a glass sphere into homogeneous fog, a volumetric caustic and a surface caustic,
+//! the file's length limit of 12). Slow tier.
+//!
+//! The image (32 × 32; the merging algorithms at 4 × that, as in `vcm_consistency.rs`) is cut
+//! into 8 × 8 blocks; every iteration is an independent estimate, so each block's mean over the
+//! iterations, with its standard error from their spread, supports a Z-test against the
+//! reference's (Šidák over the entries of all comparisons, family-wise α = 1e-3), and so do the
+//! channel means pooled over the compared blocks, which give the power check: every comparison
+//! must reject its estimate scaled by 1 ± [`POWER`].
+//!
+//! Which blocks are compared, and why:
+//! * none whose primary rays meet the glass sphere: the reference `bpt` cannot join the
+//!   sub-paths of light that reaches the camera through the sphere after the sphere focused
+//!   the delta spot (camera – glass – fog or wall – glass – spot has no connectable pair of
+//!   vertices), so it is not a reference there (docs/performance.md measured it 4.6 % low in the
+//!   sphere's box against a long `vcm`); `lt` cannot see through the sphere either;
+//! * for `ppm`, `bpm` and `vcm`, none where a merging disc of the initial radius reaches
+//!   across an edge onto another surface (their kernel bias, `vcm_consistency.rs`);
+//! * `pt` is not compared: it cannot sample any path whose light vertex is the delta spot
+//!   followed by the glass, and the focused beam lights the fog and the floor in most blocks.
+//!
+//! **Not yet here: `bpm` and `vcm`.** At 200 iterations at 128² their block estimates on this
+//! scene are not yet normal enough for the Z-test: with r = 0.01 R, bpm's block ratios to bpt
+//! range from 0.6 to 2.2 with z from −22 to +1.6, the large |z| all negative (rare large
+//! volumetric merges: most iterations miss them, so the mean sits low with a standard error
+//! that does not cover it). vcm's blocks agree within a few % except block (6, 3), low in
+//! every run (0.974 at r = 0.01 R, z = −4.4; 0.887 at r = 0.03 R, z = −11), a deficit that
+//! grows with the radius like a kernel bias at a sharp feature, but not yet shown to be one.
+//! Issue #15 keeps them open (measured with `vcm render --scene cornell-fog -r 128x128 -i 200
+//! --radius-factor 0.01|0.03` against a 3000-iteration bpt at 32²).
+
+mod common;
+
+use std::path::Path;
+
+use common::comparison::Comparison;
+use common::{BlockEstimate, BlockView, block_estimate, block_views, settings};
+use render::RenderSettings;
+use scene::Scene;
+
+/// Reference resolution (square).
+const RESOLUTION: u32 = 32;
+/// Blocks per image side.
+const GRID: u32 = 8;
+/// Family-wise significance over every entry of every comparison.
+const ALPHA: f64 = 1e-3;
+/// Merging radius factor (as `vcm_consistency.rs`, whose module documentation bounds the bias).
+const RADIUS_FACTOR: f32 = 1e-2;
+/// The fog box is dark: its compared block means average about 0.011 (the Cornell scenes'
+/// tests ask for 0.02); the power check [`POWER`] is what guards against a test too noisy to
+/// see anything.
+const MIN_MEAN: f64 = 0.005;
+/// The relative bias every comparison must be able to detect.
+const POWER: f64 = 0.05;
+
+/// How an algorithm is rendered: resolution multiple and iterations.
+#[derive(Clone, Copy, Debug)]
+struct Plan {
+    algorithm: &'static str,
+    scale: u32,
+    iterations: u64,
+}
+
+/// `scenes/cornell-fog.xml` at `resolution²` and its length limit.
+fn cornell_fog(resolution: u32) -> (Scene, u32) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-fog.xml");
+    let desc = io::load_scene(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let max_length = desc.max_path_length.expect("the file names max_depth");
+    let (scene, _) = Scene::from_description(&desc, Some((resolution, resolution))).unwrap();
+    (scene, max_length)
+}
+
+/// Renders `plan` and returns its 8 × 8 block estimate.
+fn estimate(plan: Plan, seed: u64) -> BlockEstimate {
+    let resolution = RESOLUTION * plan.scale;
+    let (scene, max_length) = cornell_fog(resolution);
+    let settings = RenderSettings { radius_factor: RADIUS_FACTOR, max_length, ..settings(plan.algorithm, seed) };
+    let estimate = block_estimate(&scene, &settings, plan.iterations, resolution / GRID);
+    assert_eq!(estimate.blocks_x, GRID as usize);
+    estimate
+}
+
+/// Whether `algorithm` is compared with the `bpt` reference on a block that looks like `view`.
+fn comparable(algorithm: &str, view: &BlockView, radius: f32) -> bool {
+    let lt_ok = algorithm != "lt" || !view.emitter_or_background;
+    let merging = matches!(algorithm, "ppm" | "bpm" | "vcm");
+    !view.specular && lt_ok && (!merging || view.clearance > radius)
+}
+
+/// lt and ppm agree with a long bpt per block and in the pooled means, on the blocks the module
+/// documentation lists, and each comparison detects a 5 % bias (measured: lt 0.3 %, ppm 3.6 %).
+#[test]
+#[ignore = "slow: run with --ignored"]
+fn light_tracing_and_photon_mapping_agree_with_bpt_in_the_fog_box() {
+    let plans =
+        [Plan { algorithm: "lt", scale: 1, iterations: 4000 }, Plan { algorithm: "ppm", scale: 4, iterations: 200 }];
+    let reference = Plan { algorithm: "bpt", scale: 1, iterations: 8000 };
+    let (scene, _) = cornell_fog(RESOLUTION);
+    let views = block_views(&scene, RESOLUTION / GRID);
+    let radius = RADIUS_FACTOR * scene.bounding_sphere.radius;
+    let alpha = testkit::sidak(ALPHA, plans.len());
+    let bpt = estimate(reference, 1);
+    let mut failures = Vec::new();
+    for plan in plans {
+        let tested = estimate(plan, 2);
+        let what = format!("cornell-fog: {} vs bpt", plan.algorithm);
+        let keep = |v: &BlockView| comparable(plan.algorithm, v, radius);
+        let result = Comparison::new(what, &tested, &bpt, &views, keep, alpha, MIN_MEAN);
+        if !result.outcome.passed {
+            failures.push(format!("{}: {}", result.what, result.outcome));
+        }
+        if result.detectable > POWER {
+            failures.push(format!("{}: no power to see a bias of {} %", result.what, 100.0 * POWER));
+        }
+    }
+    assert!(failures.is_empty(), "inconsistent estimates:\n{}", failures.join("\n"));
+}
