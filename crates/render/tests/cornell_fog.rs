@@ -1,4 +1,4 @@
-//! Light tracing and photon mapping against a long `bpt` render per block on the fog-filled Cornell
+//! lt, ppm and vcm against a long `bpt` render per block on the fog-filled Cornell
 //! box of issue #15 (`scenes/cornell-fog.xml`, loaded as a user's file is: a spot light shining
 //! down through a glass sphere into homogeneous fog, a volumetric caustic and a surface caustic,
 //! the file's length limit of 12). Slow tier.
@@ -21,15 +21,24 @@
 //! * `pt` is not compared: it cannot sample any path whose light vertex is the delta spot
 //!   followed by the glass, and the focused beam lights the fog and the floor in most blocks.
 //!
-//! **Not yet here: `bpm` and `vcm`.** At 200 iterations at 128² their block estimates on this
-//! scene are not yet normal enough for the Z-test: with r = 0.01 R, bpm's block ratios to bpt
-//! range from 0.6 to 2.2 with z from −22 to +1.6, the large |z| all negative (rare large
-//! volumetric merges: most iterations miss them, so the mean sits low with a standard error
-//! that does not cover it). vcm's blocks agree within a few % except block (6, 3), low in
-//! every run (0.974 at r = 0.01 R, z = −4.4; 0.887 at r = 0.03 R, z = −11), a deficit that
-//! grows with the radius like a kernel bias at a sharp feature, but not yet shown to be one.
-//! Issue #15 keeps them open (measured with `vcm render --scene cornell-fog -r 128x128 -i 200
-//! --radius-factor 0.01|0.03` against a 3000-iteration bpt at 32²).
+//! Merging radii: `ppm` at r = 0.01 R (R the scene's bounding radius), as in
+//! `vcm_consistency.rs`; `vcm` at the renderer's default r = 0.003 R. At 0.01 R and 0.03 R vcm's
+//! block (6, 3) came out 2.6 % and 11 % low (z = −4.4 and −11) while at 0.003 R and 0.001 R it
+//! agrees within 0.1 %: a deficit that shrinks with the radius is the merging kernel's blur
+//! of a sharp feature, not an engine bias, and at the default radius it is below the noise.
+//!
+//! **Not here: `bpm`.** Its block estimates on this scene are far from normal at any sample
+//! count this tier can afford: after 10 000 iterations at 32² (r = 0.01 R) its block ratios to
+//! bpt still spread from 0.72 to 1.29 with z from −5.3 to +2.0, the large |z| negative (rare
+//! large volumetric merges: most iterations miss them, so the mean sits low with a standard
+//! error that does not cover it); at 128² and 300 iterations (r = 0.003 R) the spread is 0.71
+//! to 1.62. A larger radius makes the estimates better behaved but biases them near the walls
+//! and the beam: at r = 0.05 R (128², 400 iterations) the blocks spread only from 0.88 to 1.09,
+//! yet the test fails on block (0, 4), the red wall seen at a grazing angle, blue channel,
+//! z = −6.1, which this session did not separate into kernel bias and skew. bpm's agreement in
+//! media is tested in the fog room of `vcm_media.rs`, where merges are denser. (Measured with
+//! `vcm render --scene cornell-fog -a bpm|vcm --radius-factor F`
+//! against a 3000-iteration bpt at 32².)
 
 mod common;
 
@@ -46,8 +55,6 @@ const RESOLUTION: u32 = 32;
 const GRID: u32 = 8;
 /// Family-wise significance over every entry of every comparison.
 const ALPHA: f64 = 1e-3;
-/// Merging radius factor (as `vcm_consistency.rs`, whose module documentation bounds the bias).
-const RADIUS_FACTOR: f32 = 1e-2;
 /// The fog box is dark: its compared block means average about 0.011 (the Cornell scenes'
 /// tests ask for 0.02); the power check [`POWER`] is what guards against a test too noisy to
 /// see anything.
@@ -55,13 +62,19 @@ const MIN_MEAN: f64 = 0.005;
 /// The relative bias every comparison must be able to detect.
 const POWER: f64 = 0.05;
 
-/// How an algorithm is rendered: resolution multiple and iterations.
+/// How an algorithm is rendered: resolution multiple, iterations and merging radius factor.
 #[derive(Clone, Copy, Debug)]
 struct Plan {
     algorithm: &'static str,
     scale: u32,
     iterations: u64,
+    radius_factor: f32,
 }
+
+/// ppm's radius factor (as `vcm_consistency.rs`, whose module documentation bounds the bias).
+const PPM_RADIUS_FACTOR: f32 = 1e-2;
+/// vcm's: the renderer's default (see the module documentation).
+const VCM_RADIUS_FACTOR: f32 = 3e-3;
 
 /// `scenes/cornell-fog.xml` at `resolution²` and its length limit.
 fn cornell_fog(resolution: u32) -> (Scene, u32) {
@@ -77,7 +90,7 @@ fn cornell_fog(resolution: u32) -> (Scene, u32) {
 fn estimate(plan: Plan, seed: u64) -> BlockEstimate {
     let resolution = RESOLUTION * plan.scale;
     let (scene, max_length) = cornell_fog(resolution);
-    let settings = RenderSettings { radius_factor: RADIUS_FACTOR, max_length, ..settings(plan.algorithm, seed) };
+    let settings = RenderSettings { radius_factor: plan.radius_factor, max_length, ..settings(plan.algorithm, seed) };
     let estimate = block_estimate(&scene, &settings, plan.iterations, resolution / GRID);
     assert_eq!(estimate.blocks_x, GRID as usize);
     estimate
@@ -90,24 +103,27 @@ fn comparable(algorithm: &str, view: &BlockView, radius: f32) -> bool {
     !view.specular && lt_ok && (!merging || view.clearance > radius)
 }
 
-/// lt and ppm agree with a long bpt per block and in the pooled means, on the blocks the module
-/// documentation lists, and each comparison detects a 5 % bias (measured: lt 0.3 %, ppm 3.6 %).
+/// lt, ppm and vcm agree with a long bpt per block and in the pooled means, on the blocks the
+/// module documentation lists, and each comparison detects a 5 % bias.
 #[test]
 #[ignore = "slow: run with --ignored"]
-fn light_tracing_and_photon_mapping_agree_with_bpt_in_the_fog_box() {
-    let plans =
-        [Plan { algorithm: "lt", scale: 1, iterations: 4000 }, Plan { algorithm: "ppm", scale: 4, iterations: 200 }];
-    let reference = Plan { algorithm: "bpt", scale: 1, iterations: 8000 };
+fn lt_ppm_and_vcm_agree_with_bpt_in_the_fog_box() {
+    let plans = [
+        Plan { algorithm: "lt", scale: 1, iterations: 4000, radius_factor: 0.0 },
+        Plan { algorithm: "ppm", scale: 4, iterations: 200, radius_factor: PPM_RADIUS_FACTOR },
+        Plan { algorithm: "vcm", scale: 4, iterations: 300, radius_factor: VCM_RADIUS_FACTOR },
+    ];
+    let reference = Plan { algorithm: "bpt", scale: 1, iterations: 8000, radius_factor: 0.0 };
     let (scene, _) = cornell_fog(RESOLUTION);
     let views = block_views(&scene, RESOLUTION / GRID);
-    let radius = RADIUS_FACTOR * scene.bounding_sphere.radius;
+    let radius = |plan: Plan| plan.radius_factor * scene.bounding_sphere.radius;
     let alpha = testkit::sidak(ALPHA, plans.len());
     let bpt = estimate(reference, 1);
     let mut failures = Vec::new();
     for plan in plans {
         let tested = estimate(plan, 2);
         let what = format!("cornell-fog: {} vs bpt", plan.algorithm);
-        let keep = |v: &BlockView| comparable(plan.algorithm, v, radius);
+        let keep = |v: &BlockView| comparable(plan.algorithm, v, radius(plan));
         let result = Comparison::new(what, &tested, &bpt, &views, keep, alpha, MIN_MEAN);
         if !result.outcome.passed {
             failures.push(format!("{}: {}", result.what, result.outcome));
