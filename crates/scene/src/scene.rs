@@ -192,19 +192,29 @@ impl Scene {
         let scene_box = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
         let (center, radius) = if scene_box.is_empty() { (Vec3::ZERO, 1.0) } else { scene_box.bounding_sphere() };
         let background = lights.iter().position(Light::is_environment).map(|i| i as u32);
+        let fibres: Vec<bool> = materials.iter().map(Material::is_fibre).collect();
+        // Triangles that need nothing after the geometric test (no alpha mask, not a fibre, see
+        // `alpha_keeps`) are tested by the BVH itself, four at a time.
+        let plain_triangle = |id: u32| match primitives.get(id as usize) {
+            Some(&Primitive { shape: Shape::Triangle(triangle), alpha: None, material, .. })
+                if !fibres.get(material as usize).copied().unwrap_or(false) =>
+            {
+                Some(triangle)
+            }
+            _ => None,
+        };
         #[cfg(feature = "embree")]
         let embree = embree_backend(&primitives, &materials, instances.len());
         #[cfg(feature = "embree")]
-        let bvh = if embree.is_some() { Bvh::build(&[]) } else { Bvh::build(&bounds) };
+        let bvh = if embree.is_some() { Bvh::build(&[]) } else { Bvh::build_with_triangles(&bounds, plain_triangle) };
         #[cfg(not(feature = "embree"))]
-        let bvh = Bvh::build(&bounds);
+        let bvh = Bvh::build_with_triangles(&bounds, plain_triangle);
         let bounding_sphere = BoundingSphere { center, radius };
         // One emitter per light (one id per light: cannot fail).
         let own_groups: Vec<u32> = (0..lights.len() as u32).collect();
         let light_selection = light_selection(&lights, &bounding_sphere, &own_groups).unwrap_or(None);
         let reads_mesh_attribute = materials.iter().map(|m| matches!(m.mesh_attribute(), Ok(Some(_)))).collect();
         let anisotropic = materials.iter().map(Material::is_anisotropic).collect();
-        let fibres = materials.iter().map(Material::is_fibre).collect();
         Self {
             name: name.into(),
             primitives,

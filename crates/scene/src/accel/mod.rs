@@ -4,13 +4,18 @@
 //! rayon for large inputs, then collapsed into 4-wide nodes) and its traversal for nearest hits
 //! and occlusion (any hit). It is primitive-agnostic: the tree only knows each primitive's
 //! bounding box and index, and the caller intersects a primitive in a closure, so triangles and
-//! analytic shapes share one tree. See `docs/bvh.md`.
+//! analytic shapes share one tree; only triangles that need nothing but the geometric test may
+//! be handed to the tree, which then tests them itself ([`Bvh::build_with_triangles`]). See
+//! `docs/bvh.md`.
 //!
 //! Files: `build.rs` (binary SAH build), `binary.rs` (its node layout), `wide.rs` (4-wide nodes
 //! and the collapse), `ray_box.rs` (the 4-lane slab test), `traverse.rs` (the queries and their
-//! tie rule), `binary_traverse.rs` (the previous binary traversal, only for A/B benchmarks
-//! behind the `binary-bvh` feature, and for tests), `embree.rs` (the optional Embree 3 backend
-//! for triangle-only scenes, behind the `embree` feature; see `docs/embree.md`).
+//! tie rule), `triangle_block.rs` (leaves of plain triangles stored as 4-lane blocks that the
+//! queries test themselves, [`Bvh::build_with_triangles`]), `binary_traverse.rs` (the previous
+//! binary traversal, only for A/B benchmarks behind the `binary-bvh` feature, and for tests),
+//! `embree.rs` (the optional Embree 3 backend for triangle-only scenes, behind the `embree`
+//! feature; see `docs/embree.md`). Tests: `tests.rs` (the tree), `triangle_block_tests.rs` and
+//! `scene_block_tests.rs` (blocks, in the tree and in [`crate::Scene`]'s queries).
 
 mod binary;
 #[cfg(any(test, feature = "binary-bvh"))]
@@ -21,12 +26,19 @@ mod build;
 pub mod embree;
 mod ray_box;
 mod traverse;
+mod triangle_block;
 mod wide;
 
 #[cfg(test)]
+mod scene_block_tests;
+#[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod triangle_block_tests;
 
 use math::{Aabb, Ray};
+
+use crate::shape::Triangle;
 
 #[cfg(feature = "binary-bvh")]
 pub use binary_traverse::BinaryBvh;
@@ -83,6 +95,9 @@ pub struct Bvh {
     nodes: Vec<wide::WideNode>,
     /// Primitive ids, grouped by leaf (leaves of several primitives name a range of it).
     prims: Vec<u32>,
+    /// The leaves of plain triangles ([`Bvh::build_with_triangles`]), which the traversal tests
+    /// itself; empty for [`Bvh::build`].
+    blocks: Vec<triangle_block::TriangleBlock>,
     /// Bounds of all primitives.
     bounds: Aabb,
     /// Statistics gathered while building.
@@ -99,11 +114,34 @@ impl Bvh {
     pub fn build(bounds: &[Aabb]) -> Bvh {
         let tree = build::build_binary(bounds);
         if tree.prims.is_empty() {
-            return Bvh { nodes: Vec::new(), prims: Vec::new(), bounds: Aabb::EMPTY, stats: tree.stats };
+            return Bvh {
+                nodes: Vec::new(),
+                prims: Vec::new(),
+                blocks: Vec::new(),
+                bounds: Aabb::EMPTY,
+                stats: tree.stats,
+            };
         }
         let wide = wide::collapse(&tree);
         let stats = BvhStats { wide_nodes: wide.nodes.len(), wide_max_depth: wide.max_depth, ..tree.stats };
-        Bvh { nodes: wide.nodes, prims: tree.prims, bounds: Aabb::new(tree.root.min(), tree.root.max()), stats }
+        let bounds = Aabb::new(tree.root.min(), tree.root.max());
+        Bvh { nodes: wide.nodes, prims: tree.prims, blocks: Vec::new(), bounds, stats }
+    }
+
+    /// [`Bvh::build`] for primitives of which some are plain triangles: `triangle(id)` returns
+    /// the triangle of primitive `id` when the ray queries need nothing but its geometric test
+    /// ([`Triangle::intersect`]), `None` otherwise.
+    ///
+    /// The tree is the same as [`Bvh::build`]'s; every leaf whose primitives are all plain
+    /// triangles is stored as a block of four lanes that the queries test at once themselves,
+    /// without calling their closure (which is then only called for the other primitives).
+    /// The answers are those of [`Bvh::build`] with a closure that calls
+    /// [`Triangle::intersect`] for the plain triangles: the same primitive and bit-identical
+    /// distance, with the same tie rule.
+    pub fn build_with_triangles(bounds: &[Aabb], triangle: impl Fn(u32) -> Option<Triangle>) -> Bvh {
+        let mut bvh = Bvh::build(bounds);
+        bvh.blocks = triangle_block::gather(&mut bvh.nodes, &bvh.prims, triangle);
+        bvh
     }
 
     /// Bounds of all primitives in the tree ([`Aabb::EMPTY`] for an empty tree).
@@ -120,8 +158,9 @@ impl Bvh {
     ///
     /// Calls `intersect(prim, ray, t)`, which must return `Some(t_hit)` for a hit with
     /// `0 < t_hit < t` (and may have side effects: every hit it reports is taken, so the last
-    /// one reported is the result whenever any is). Returns the primitive and distance of the
-    /// nearest hit. Of primitives hit at exactly the same distance the one with the smallest id
+    /// one reported is the result whenever the result is a primitive of the closure; the plain
+    /// triangles of [`Bvh::build_with_triangles`] are tested without it). Returns the primitive
+    /// and distance of the nearest hit. Of primitives hit at exactly the same distance the one with the smallest id
     /// is returned, so the result does not depend on the tree's shape or the traversal order;
     /// for that, `t` is sometimes one ulp above the nearest distance found so far.
     #[inline]
@@ -148,7 +187,8 @@ impl Bvh {
     /// Whether anything blocks `ray` before `t_max` (shadow rays); stops at the first blocker.
     ///
     /// Calls `occluded(prim, ray, t_max)`, which must return true if the primitive intersects
-    /// the ray at some `t` in `(0, t_max)`.
+    /// the ray at some `t` in `(0, t_max)` (not for the plain triangles of
+    /// [`Bvh::build_with_triangles`], which are tested without it).
     #[inline]
     pub fn any_hit(&self, ray: &Ray, t_max: f32, occluded: impl FnMut(u32, &Ray, f32) -> bool) -> bool {
         self.any_hit_with(ray, t_max, occluded, &mut ())

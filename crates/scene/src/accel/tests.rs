@@ -9,20 +9,25 @@ use super::*;
 use crate::shape::{Sphere, Triangle};
 use math::{Rng, Vec3};
 
-type Tri = [Vec3; 3];
+pub(super) type Tri = [Vec3; 3];
 
 /// Möller–Trumbore, accepting `0 < t < t_max`.
-fn intersect_triangle(tri: &Tri, ray: &Ray, t_max: f32) -> Option<f32> {
+pub(super) fn intersect_triangle(tri: &Tri, ray: &Ray, t_max: f32) -> Option<f32> {
     Triangle::new(tri[0], tri[1], tri[2]).intersect(ray, t_max)
 }
 
-fn triangle_bounds(tris: &[Tri]) -> Vec<Aabb> {
+pub(super) fn triangle_bounds(tris: &[Tri]) -> Vec<Aabb> {
     tris.iter().map(|t| Aabb::from_points(t.iter().copied())).collect()
 }
 
 /// The reference: every primitive in id order, a later one only when strictly nearer, so of
 /// equally near hits the smallest id wins (the tie rule the BVH promises).
-fn brute_closest(n: usize, ray: &Ray, t_max: f32, hit: impl Fn(usize, &Ray, f32) -> Option<f32>) -> Option<(u32, f32)> {
+pub(super) fn brute_closest(
+    n: usize,
+    ray: &Ray,
+    t_max: f32,
+    hit: impl Fn(usize, &Ray, f32) -> Option<f32>,
+) -> Option<(u32, f32)> {
     let mut best = None;
     let mut t_best = t_max;
     for i in 0..n {
@@ -36,7 +41,7 @@ fn brute_closest(n: usize, ray: &Ray, t_max: f32, hit: impl Fn(usize, &Ray, f32)
 
 /// Rays for which the BVH's nearest hit (primitive and bit pattern of `t`) or its any-hit answer
 /// differs from brute force, and the number of rays that hit something.
-fn mismatches(
+pub(super) fn mismatches(
     bvh: &Bvh,
     n: usize,
     rays: &[(Ray, f32)],
@@ -72,11 +77,11 @@ fn check(tris: &[Tri], bvh: &Bvh, rays: &[(Ray, f32)]) -> usize {
     hits
 }
 
-fn random_vec(rng: &mut Rng, scale: f32) -> Vec3 {
+pub(super) fn random_vec(rng: &mut Rng, scale: f32) -> Vec3 {
     Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * scale
 }
 
-fn random_direction(rng: &mut Rng) -> Vec3 {
+pub(super) fn random_direction(rng: &mut Rng) -> Vec3 {
     loop {
         let v = random_vec(rng, 2.0);
         if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
@@ -85,7 +90,7 @@ fn random_direction(rng: &mut Rng) -> Vec3 {
     }
 }
 
-fn random_soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Tri> {
+pub(super) fn random_soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Tri> {
     (0..n)
         .map(|_| {
             let c = random_vec(rng, 10.0);
@@ -94,7 +99,7 @@ fn random_soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Tri> {
         .collect()
 }
 
-fn random_rays(rng: &mut Rng, n: usize) -> Vec<(Ray, f32)> {
+pub(super) fn random_rays(rng: &mut Rng, n: usize) -> Vec<(Ray, f32)> {
     (0..n)
         .map(|i| {
             let t_max = if i % 3 == 0 { f32::INFINITY } else { rng.uniform() * 15.0 };
@@ -233,7 +238,7 @@ fn tree_words(bvh: &Bvh) -> Vec<u32> {
 
 /// A closed UV sphere of radius 1 with `rings × segments × 2` triangles (its pole rings are
 /// degenerate slivers, as in real meshes).
-fn uv_sphere(rings: usize, segments: usize) -> Vec<Tri> {
+pub(super) fn uv_sphere(rings: usize, segments: usize) -> Vec<Tri> {
     let point = |i: usize, j: usize| {
         let (theta, phi) =
             (std::f32::consts::PI * i as f32 / rings as f32, std::f32::consts::TAU * j as f32 / segments as f32);

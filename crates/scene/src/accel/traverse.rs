@@ -7,11 +7,16 @@
 //! with a smaller id than the current best is asked for hits up to and including the current
 //! distance (`t_max` one ulp above it), one with a larger id only for strictly nearer hits; so
 //! every hit the callback reports is taken, which callers rely on (see `Bvh::closest_hit`).
+//!
+//! Leaves stored as triangle blocks (`triangle_block.rs`) are tested here, four triangles at
+//! once, with the same tie rule per lane; other leaves go to the callback.
 
 use arrayvec::ArrayVec;
+use glam::Vec4;
 use math::Ray;
 
 use super::ray_box::{ROBUST_EXIT, RayBox};
+use super::triangle_block::{RayLanes, TRIANGLES};
 use super::wide::{INTERIOR, WIDTH};
 use super::{Bvh, MAX_DEPTH, TraversalCounts};
 
@@ -73,6 +78,13 @@ fn next_up(x: f32) -> f32 {
     if x.is_finite() { f32::from_bits(x.to_bits() + 1) } else { x }
 }
 
+/// The lanes of [`RayBox::entries`]' result whose box the ray enters (those not `+∞`), as a bit
+/// mask (bit `lane`).
+#[inline(always)]
+fn entered_lanes(t: &[f32; WIDTH]) -> u32 {
+    Vec4::from_array(*t).cmpne(Vec4::INFINITY).bitmask()
+}
+
 impl Bvh {
     /// The primitive ids of leaf `entry`. A single primitive's id is stored in the node itself,
     /// which saves the load from the index array.
@@ -99,6 +111,7 @@ impl Bvh {
             return None;
         }
         let test = RayBox::new(ray);
+        let lanes = RayLanes::new(ray);
         let mut t_best = t_max;
         let mut best: Option<u32> = None;
         let mut stack: ArrayVec<Entry, STACK_SIZE> = ArrayVec::new();
@@ -130,6 +143,25 @@ impl Bvh {
                     }
                     current = hits[count - 1];
                     continue;
+                }
+            } else if current.meta & TRIANGLES != 0 {
+                let block = &self.blocks[current.child as usize];
+                let distances = block.distances(&lanes);
+                for _ in 0..current.meta & !TRIANGLES {
+                    tally.primitive();
+                }
+                // Only hits nearer than `next_up(t_best)` can pass the tie rule's limit below (a
+                // miss is `+∞`, which passes no limit); usually there are none.
+                let mut lanes_hit = distances.cmplt(Vec4::splat(next_up(t_best))).bitmask();
+                while lanes_hit != 0 {
+                    let lane = lanes_hit.trailing_zeros() as usize % WIDTH;
+                    lanes_hit &= lanes_hit - 1;
+                    let (t, prim) = (distances[lane], block.ids[lane]);
+                    let limit = if best.is_some_and(|b| prim < b) { next_up(t_best) } else { t_best };
+                    if t < limit {
+                        t_best = t;
+                        best = Some(prim);
+                    }
                 }
             } else {
                 for &prim in self.leaf_prims(&current) {
@@ -168,19 +200,30 @@ impl Bvh {
             return false;
         }
         let test = RayBox::new(ray);
+        let lanes = RayLanes::new(ray);
         let mut stack: ArrayVec<u32, STACK_SIZE> = ArrayVec::new();
         let mut node_index = 0u32;
         loop {
             let node = &self.nodes[node_index as usize];
             tally.node(WIDTH as u64);
             let t = test.entries(node, t_max);
-            for (lane, &t_lane) in t.iter().enumerate() {
-                if t_lane == f32::INFINITY {
-                    continue;
-                }
-                let entry = Entry { child: node.child[lane], meta: node.meta[lane], t: t_lane };
+            let mut entered = entered_lanes(&t);
+            while entered != 0 {
+                let lane = entered.trailing_zeros() as usize % WIDTH;
+                entered &= entered - 1;
+                let entry = Entry { child: node.child[lane], meta: node.meta[lane], t: t[lane] };
                 if entry.meta == INTERIOR {
                     stack.push(entry.child);
+                    continue;
+                }
+                if entry.meta & TRIANGLES != 0 {
+                    for _ in 0..entry.meta & !TRIANGLES {
+                        tally.primitive();
+                    }
+                    let distances = self.blocks[entry.child as usize].distances(&lanes);
+                    if distances.cmplt(Vec4::splat(t_max)).any() {
+                        return true;
+                    }
                     continue;
                 }
                 // Leaves are tested at once: any blocker ends the query.
