@@ -149,6 +149,11 @@ struct RenderArgs {
     /// Merging radius reduction: r_i = r_0 * (i+1)^((alpha-1)/2), 0 < alpha <= 1.
     #[arg(long, value_name = "ALPHA", default_value_t = 0.75)]
     radius_alpha: f32,
+    /// Initial merging radius at medium vertices (the 3-D kernel of volumetric photon points),
+    /// as a fraction of the scene's merging scale; it shrinks as (i+1)^((alpha-1)/3) and, above
+    /// 512² pixels, as the cube root of the pixel count (scenes with media only).
+    #[arg(long, value_name = "F", default_value_t = render::vcm::DEFAULT_VOLUME_RADIUS_FACTOR)]
+    volume_radius_factor: f32,
     /// Merging radius: one for the image (scaled with the resolution above 512², or fixed), or
     /// per pixel from its footprint (tech report §6.1).
     #[arg(long, value_enum, default_value_t = RadiusModeName::Global)]
@@ -338,6 +343,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         seed: args.seed,
         radius_factor: args.radius_factor,
         radius_alpha: args.radius_alpha,
+        volume_radius_factor: args.volume_radius_factor,
         radius_mode: args.radius_mode.mode(),
         memory_efficient: args.memory_efficient,
         spectral: args.spectral,

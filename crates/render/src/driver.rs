@@ -83,6 +83,9 @@ pub struct RenderSettings {
     pub radius_factor: f32,
     /// Merging radius reduction α.
     pub radius_alpha: f32,
+    /// Initial merging radius at medium vertices as a fraction of the scene's merging scale
+    /// ([`crate::vcm::VcmSettings::volume_radius_factor`]; scenes with media only).
+    pub volume_radius_factor: f32,
     /// Global or per-pixel merging radius.
     pub radius_mode: RadiusMode,
     /// Memory-efficient progressive mode of the VCM engine (tech report §6.2).
@@ -120,6 +123,7 @@ impl Default for RenderSettings {
             progress: false,
             radius_factor: 0.003,
             radius_alpha: 0.75,
+            volume_radius_factor: crate::vcm::DEFAULT_VOLUME_RADIUS_FACTOR,
             radius_mode: RadiusMode::Global,
             memory_efficient: false,
             spectral: false,
@@ -142,6 +146,7 @@ impl RenderSettings {
                 max_length: self.max_length,
                 radius_factor: self.radius_factor,
                 radius_alpha: self.radius_alpha,
+                volume_radius_factor: self.volume_radius_factor,
                 radius_mode: self.radius_mode,
                 memory_efficient: self.memory_efficient,
                 spectral: self.spectral,

@@ -86,6 +86,9 @@ enum Mutation {
     PassIsCertain,
     /// η_V/η_A = (4/3) r one per mille too large: a small consistent mistake.
     VolumePerMilleLarge,
+    /// The engine's ball has the surface radius r while the oracle's has r_V: the separate
+    /// volume radius not applied.
+    VolumeOfSurfaceRadius,
     /// Only the connection segments (`segment`: next event, connections, camera
     /// connections) pass with probability 1; the walks are right.
     PassIsCertainInConnections,
@@ -127,7 +130,10 @@ enum Technique {
 struct Counts {
     light: usize,
     merge: usize,
+    /// The merge disc's radius at surface vertices.
     radius: f32,
+    /// The merge ball's radius at medium vertices.
+    volume_radius: f32,
 }
 
 /// Explicit eq. (12) in f64: (technique, n · p) for every technique that can produce the path.
@@ -165,7 +171,7 @@ fn oracle(
     }
     let connectable = |i: usize| !path.is_specular(i);
     let disc = std::f64::consts::PI * (counts.radius as f64).powi(2);
-    let ball = 4.0 / 3.0 * std::f64::consts::PI * (counts.radius as f64).powi(3);
+    let ball = 4.0 / 3.0 * std::f64::consts::PI * (counts.volume_radius as f64).powi(3);
     let mut techniques = Vec::new();
     if connect {
         for s in 0..=k {
@@ -337,9 +343,9 @@ struct Report {
 }
 
 /// Runs 4000 random paths for the technique families `connect`/`merge` (4096 light sub-paths,
-/// radius `radius`) and measures the engine against the oracle.
+/// one radius `radius` at surface and medium vertices) and measures the engine against the oracle.
 fn run(connect: bool, merge: bool, radius: f32, mutation: Mutation, oracle_area_in_medium: bool) -> Report {
-    run_groups(connect, merge, radius, mutation, oracle_area_in_medium, 1)
+    run_groups(connect, merge, (radius, radius), mutation, oracle_area_in_medium, 1)
 }
 
 /// [`run`] with the light sub-paths split into `groups` wavelength groups that merge only
@@ -348,16 +354,20 @@ fn run(connect: bool, merge: bool, radius: f32, mutation: Mutation, oracle_area_
 fn run_groups(
     connect: bool,
     merge: bool,
-    radius: f32,
+    (radius, volume_radius): (f32, f32),
     mutation: Mutation,
     oracle_area_in_medium: bool,
     groups: usize,
 ) -> Report {
     let mut rng = Rng::for_stream(2014, 15, 0);
-    let counts = Counts { light: 4096, merge: 4096 / groups, radius };
-    let mut kc = MisConstants::with_merge_paths(4096.0, (4096 / groups) as f32, radius, connect, merge);
+    let counts = Counts { light: 4096, merge: 4096 / groups, radius, volume_radius };
+    let mut kc = MisConstants::with_merge_paths(4096.0, (4096 / groups) as f32, radius, connect, merge)
+        .with_volume_radius(volume_radius);
     if mutation == Mutation::VolumePerMilleLarge {
         kc.volume_over_area *= 1.001;
+    }
+    if mutation == Mutation::VolumeOfSurfaceRadius {
+        kc = kc.with_volume_radius(radius);
     }
     let lights = [LightKind::Area, LightKind::Point, LightKind::Directional, LightKind::Environment];
     let mut report = Report { mutation, ..Report::default() };
@@ -400,11 +410,12 @@ fn run_groups(
 }
 
 fn check(name: &str, connect: bool, merge: bool) {
-    for radius in [0.02, 0.3] {
-        let r = run(connect, merge, radius, Mutation::None, false);
-        eprintln!("{name}, radius {radius}: {r:?}");
-        assert!(r.worst_error < 1e-4, "{name}, radius {radius}: engine and oracle differ: {r:?}");
-        assert!(r.worst_sum < 1e-4, "{name}, radius {radius}: weights do not sum to 1: {r:?}");
+    // The surface and volume radii (r, r_V): equal, and the ball larger or smaller than the disc.
+    for radii in [(0.02, 0.02), (0.3, 0.3), (0.02, 0.1), (0.3, 0.05)] {
+        let r = run_groups(connect, merge, radii, Mutation::None, false, 1);
+        eprintln!("{name}, radii {radii:?}: {r:?}");
+        assert!(r.worst_error < 1e-4, "{name}, radii {radii:?}: engine and oracle differ: {r:?}");
+        assert!(r.worst_sum < 1e-4, "{name}, radii {radii:?}: weights do not sum to 1: {r:?}");
         assert!(r.paths > 1000 && r.weights > 3000, "{name}: too few paths checked: {r:?}");
         assert!(
             r.with_medium_vertex > 500 && r.camera_in_medium > 500 && r.light_in_medium > 200 && r.multi_piece > 500,
@@ -434,7 +445,7 @@ fn wavelength_groups_with_media_match_the_oracle() {
     // Spectral mode groups scenes with media (`vcm/wavelengths.rs`): N_L/16 merges per camera
     // vertex, in the disc and in the ball alike.
     for (name, connect) in [("vcm", true), ("bpm", false)] {
-        let r = run_groups(connect, true, 0.3, Mutation::None, false, 16);
+        let r = run_groups(connect, true, (0.3, 0.1), Mutation::None, false, 16);
         eprintln!("{name}, 16 groups: {r:?}");
         assert!(r.worst_error < 1e-4 && r.worst_sum < 1e-4, "{name}, 16 groups: {r:?}");
         assert!(r.medium_merges > 500, "{name}: too few merges at medium vertices: {r:?}");
@@ -459,6 +470,12 @@ fn the_oracle_sees_an_area_merge_at_medium_vertices() {
     let r = run(true, true, 0.3, Mutation::VolumePerMilleLarge, false);
     eprintln!("vcm, {:?}: {r:?}", r.mutation);
     assert!(r.worst_error > 5e-4, "a ball one per mille too large went unseen: {r:?}");
+    // The engine given the surface radius for the ball while the oracle's ball has another.
+    let mut report = run_groups(true, true, (0.3, 0.1), Mutation::VolumeOfSurfaceRadius, false, 1);
+    eprintln!("vcm, {:?}: {report:?}", report.mutation);
+    assert!(report.worst_error > 0.1, "a ball of the surface radius went unseen: {report:?}");
+    report = run_groups(false, true, (0.02, 0.1), Mutation::VolumeOfSurfaceRadius, false, 1);
+    assert!(report.worst_error > 0.1, "bpm: a ball of the surface radius went unseen: {report:?}");
     // The oracle making that mistake disagrees with the engine.
     let r = run(true, true, 0.3, Mutation::None, true);
     assert!(r.worst_error > 0.1, "the oracle's area merge went unseen: {r:?}");

@@ -120,7 +120,14 @@ fn estimate(
     iterations: u64,
     seed: u64,
 ) -> BlockEstimate {
-    let settings = RenderSettings { max_length: 8, radius_factor, spectral, ..common::settings(algorithm, seed) };
+    // One radius for the disc and the ball, as the factors were chosen.
+    let settings = RenderSettings {
+        max_length: 8,
+        radius_factor,
+        volume_radius_factor: radius_factor,
+        spectral,
+        ..common::settings(algorithm, seed)
+    };
     common::block_estimate(scene, &settings, iterations, 8)
 }
 

@@ -159,6 +159,8 @@ fn merging_with_media_gives_the_furnace_radiance() {
         };
         let unit = render::vcm::base_radius(&scene, &settings.vcm_settings().unwrap()) / settings.radius_factor;
         settings.radius_factor = MERGE_RADIUS / unit;
+        // The ball at medium vertices has the same radius (the kernel-bias bound above is its).
+        settings.volume_radius_factor = settings.radius_factor;
         let stats = settings_means(&scene, &settings, iterations);
         let what = format!("{name}{} inside", if spectral { " spectral" } else { "" });
         failures.extend(judge(&what, &stats, &[1.0; 3], alpha));
@@ -373,7 +375,13 @@ fn matches_pt_in(
     pt_iterations: u64,
 ) {
     let run = |algorithm: &str, iterations: u64, seed: u64| {
-        let settings = RenderSettings { max_length, radius_factor, ..common::settings(algorithm, seed) };
+        // One radius for the disc and the ball, as the factors were chosen.
+        let settings = RenderSettings {
+            max_length,
+            radius_factor,
+            volume_radius_factor: radius_factor,
+            ..common::settings(algorithm, seed)
+        };
         common::block_estimate(scene, &settings, iterations, 8)
     };
     let pt = run("pt", pt_iterations, 5);

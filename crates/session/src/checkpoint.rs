@@ -47,6 +47,9 @@ pub struct Recorded {
     pub radius_factor: f32,
     /// Radius alpha.
     pub radius_alpha: f32,
+    /// Volume radius factor (absent in checkpoints written before it existed: the default,
+    /// [`render::vcm::DEFAULT_VOLUME_RADIUS_FACTOR`]; only renders of scenes with media use it).
+    pub volume_radius_factor: f32,
     /// `global`, `fixed` or `per-pixel`.
     pub radius_mode: String,
     /// Memory-efficient mode.
@@ -145,6 +148,7 @@ pub fn header_lines(r: &Recorded) -> Vec<String> {
     lines.push(format!("seed={}", r.seed));
     lines.push(format!("radius_factor={}", r.radius_factor));
     lines.push(format!("radius_alpha={}", r.radius_alpha));
+    lines.push(format!("volume_radius_factor={}", r.volume_radius_factor));
     lines.push(format!("radius_mode={}", r.radius_mode));
     lines.push(format!("memory_efficient={}", r.memory_efficient));
     lines.push(format!("spectral={}", r.spectral));
@@ -223,6 +227,10 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
         seed: field(&fields, "seed").ok_or_else(|| missing("seed"))?,
         radius_factor: field(&fields, "radius_factor").ok_or_else(|| missing("radius_factor"))?,
         radius_alpha: field(&fields, "radius_alpha").ok_or_else(|| missing("radius_alpha"))?,
+        volume_radius_factor: match fields.get("volume_radius_factor") {
+            None => render::vcm::DEFAULT_VOLUME_RADIUS_FACTOR,
+            Some(_) => field(&fields, "volume_radius_factor").ok_or_else(|| missing("volume_radius_factor"))?,
+        },
         radius_mode: field(&fields, "radius_mode").ok_or_else(|| missing("radius_mode"))?,
         memory_efficient: field(&fields, "memory_efficient").ok_or_else(|| missing("memory_efficient"))?,
         spectral: match fields.get("spectral") {
@@ -314,6 +322,7 @@ mod tests {
             seed: 99,
             radius_factor: 0.003,
             radius_alpha: 0.75,
+            volume_radius_factor: 0.025,
             radius_mode: "per-pixel".into(),
             memory_efficient: true,
             spectral: true,
@@ -393,6 +402,7 @@ mod tests {
             seed: 3,
             radius_factor: 0.003,
             radius_alpha: 0.75,
+            volume_radius_factor: 0.025,
             radius_mode: "global".into(),
             memory_efficient: false,
             spectral: false,

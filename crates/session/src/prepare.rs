@@ -78,6 +78,7 @@ impl Prepared {
                 request.seed = recorded.seed;
                 request.radius_factor = recorded.radius_factor;
                 request.radius_alpha = recorded.radius_alpha;
+                request.volume_radius_factor = recorded.volume_radius_factor;
                 request.radius_mode = radius_mode_from_name(&recorded.radius_mode).ok_or_else(|| {
                     anyhow::anyhow!("unknown radius mode '{}' in '{}'", recorded.radius_mode, path.display())
                 })?;
@@ -207,6 +208,7 @@ impl Prepared {
             progress: r.progress,
             radius_factor: r.radius_factor,
             radius_alpha: r.radius_alpha,
+            volume_radius_factor: r.volume_radius_factor,
             radius_mode: r.radius_mode,
             memory_efficient: r.memory_efficient,
             spectral: r.spectral,
@@ -259,6 +261,7 @@ impl Prepared {
             seed: r.seed,
             radius_factor: r.radius_factor,
             radius_alpha: r.radius_alpha,
+            volume_radius_factor: r.volume_radius_factor,
             radius_mode: radius_mode_name(r.radius_mode).to_string(),
             memory_efficient: settings.memory_efficient,
             spectral: r.spectral,

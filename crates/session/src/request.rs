@@ -38,6 +38,9 @@ pub struct Request {
     pub radius_factor: f32,
     /// Merging radius reduction α, in (0, 1].
     pub radius_alpha: f32,
+    /// Initial merging radius at medium vertices as a fraction of the scene's merging scale
+    /// (scenes with media; `render::vcm::VcmSettings::volume_radius_factor`).
+    pub volume_radius_factor: f32,
     /// Global or per-pixel merging radius.
     pub radius_mode: RadiusMode,
     /// Memory-efficient progressive VCM (tech report §6.2).
@@ -112,6 +115,7 @@ impl Request {
             seed: 0,
             radius_factor: defaults.radius_factor,
             radius_alpha: defaults.radius_alpha,
+            volume_radius_factor: defaults.volume_radius_factor,
             radius_mode: RadiusMode::Global,
             memory_efficient: false,
             spectral: false,

@@ -169,6 +169,9 @@ pub(crate) fn validate(r: &Request, resumed: bool) -> Result<()> {
     if !(r.radius_factor.is_finite() && r.radius_factor > 0.0) {
         bail!("--radius-factor must be a positive number, got {}", r.radius_factor);
     }
+    if !(r.volume_radius_factor.is_finite() && r.volume_radius_factor > 0.0) {
+        bail!("--volume-radius-factor must be a positive number, got {}", r.volume_radius_factor);
+    }
     if !(r.radius_alpha > 0.0 && r.radius_alpha <= 1.0) {
         bail!("--radius-alpha must be in (0, 1], got {}", r.radius_alpha);
     }

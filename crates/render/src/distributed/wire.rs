@@ -32,6 +32,7 @@ pub fn encode_message(stop: bool, result: Option<&IterationResult>) -> Vec<u8> {
                 put_u64(&mut out, v);
             }
             out.extend_from_slice(&s.radius.to_le_bytes());
+            out.extend_from_slice(&s.volume_radius.to_le_bytes());
         }
         None => out.push(0),
     }
@@ -86,6 +87,7 @@ pub fn decode_message(bytes: &[u8], from: usize) -> Result<(bool, Option<Iterati
             rejected,
             rejected_by_family,
             radius: r.f32()?,
+            volume_radius: r.f32()?,
             phases: Default::default(),
         })
     } else {

@@ -83,6 +83,7 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
         constants: MisConstants::new(light_paths, radius.max(1e-7), techniques.connect, techniques.merge),
         max_length: settings.max_length,
         radius,
+        grid_radius: radius,
         pixel_radii: None,
         techniques,
         across_groups: false,

@@ -206,9 +206,13 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
         MergeScope::Group(group) => k.vm_normalization * group.normalization_scale,
         MergeScope::All | MergeScope::AcrossGroups(..) => k.vm_normalization,
     };
-    // A medium vertex merges with the 3-D kernel 1/((4/3) π r³ N_VM) (Křivánek et al. 2014,
-    // point–point): the area normalisation times η_A/η_V.
-    let normalization = if scatterer.is_medium() { normalization / k.volume_over_area } else { normalization };
+    // A medium vertex merges with the 3-D kernel 1/((4/3) π r_V³ N_VM) (Křivánek et al. 2014,
+    // point–point) within its own radius r_V: the area normalisation times η_A/η_V.
+    let (normalization, radius) = if scatterer.is_medium() {
+        (normalization / k.volume_over_area, k.volume_radius)
+    } else {
+        (normalization, radius)
+    };
     // The MIS-weighted value of merging with `light` at wavelengths `w` (before the camera
     // sub-path's throughput and the kernel normalisation), or `None` when it does not count.
     let part = |light: &MergeRecord<S>, w: &S::Wavelengths| -> Option<S> {

@@ -15,7 +15,7 @@
 //! ratio of path pdfs in which a merge at vertex j carries *its own* η_j. The report's
 //! recursion folds one η into global constants; here the quantities stay normalised by
 //! η_A = `eta_vcm` (so a surface-only path computes exactly the same floats as before) and the
-//! ratio η_V/η_A = (4/3) r ([`MisConstants::volume_over_area`]) enters where a medium vertex's
+//! ratio η_V/η_A = (4/3) r_V³/r² ([`MisConstants::volume_over_area`]) enters where a medium vertex's
 //! merge is counted:
 //!
 //! - dVCM (eqs. 31, 34): no η (it holds the connection to the vertex and the camera's 1/p).
@@ -29,8 +29,8 @@
 //! - Merge at x (eqs. 38, 39): w_light and w_camera are relative to a merge of η_A; relative
 //!   to the merge actually made they are multiplied by η_A/η_x ([`merge_weight_in_medium`]).
 //!
-//! Eqs. 62, 63 rebuild dVC and dVM from cVC and cVM for the *same* radius only: cVM now
-//! holds (4/3) r, so the per-pixel radius (§6.1) is refused in scenes with media.
+//! Eqs. 62, 63 rebuild dVC and dVM from cVC and cVM for the *same* radii only: cVM now
+//! holds (4/3) r_V³/r², so the per-pixel radius (§6.1) is refused in scenes with media.
 
 use math::PI;
 
@@ -57,10 +57,15 @@ pub struct MisConstants {
     /// N_VM, the number of light sub-paths a camera vertex merges with (N_L/K with K wavelength
     /// groups).
     pub merge_path_count: f32,
-    /// η_V/η_A = (4/3) r (scene units): the ratio of a medium vertex's merge acceptance volume
-    /// N_VM (4/3) π r³ to a surface vertex's area N_VM π r² (see "Medium vertices" in the
-    /// module doc).
+    /// η_V/η_A = (4/3) r_V³/r² (scene units): the ratio of a medium vertex's merge acceptance
+    /// volume N_VM (4/3) π r_V³ to a surface vertex's area N_VM π r² (see "Medium vertices" in
+    /// the module doc).
     pub volume_over_area: f32,
+    /// r, the merging radius at surface vertices (scene units).
+    pub radius: f32,
+    /// r_V, the radius of the merge ball at medium vertices (scene units); r, unless
+    /// [`MisConstants::with_volume_radius`] set another.
+    pub volume_radius: f32,
 }
 
 impl MisConstants {
@@ -89,10 +94,23 @@ impl MisConstants {
             light_path_count,
             merge_path_count,
             volume_over_area: 4.0 / 3.0 * radius,
+            radius,
+            volume_radius: radius,
         }
     }
 
-    /// η of a vertex's type over the surface η_A: 1 on a surface, η_V/η_A = (4/3) r in a
+    /// These constants with the merge ball of medium vertices of radius `volume_radius` (r_V,
+    /// scene units) instead of the surface radius r: η_V/η_A = (4/3) r_V³/r². The surface
+    /// quantities are unchanged; `volume_radius == r` gives exactly the single-radius constants.
+    pub fn with_volume_radius(self, volume_radius: f32) -> Self {
+        if volume_radius == self.radius {
+            return Self { volume_over_area: 4.0 / 3.0 * self.radius, volume_radius, ..self };
+        }
+        let ratio = volume_radius / self.radius;
+        Self { volume_over_area: 4.0 / 3.0 * volume_radius * ratio * ratio, volume_radius, ..self }
+    }
+
+    /// η of a vertex's type over the surface η_A: 1 on a surface, η_V/η_A = (4/3) r_V³/r² in a
     /// medium (module doc, "Medium vertices").
     #[inline]
     pub fn eta_scale(&self, medium: bool) -> f32 {
@@ -212,7 +230,7 @@ impl SubPathMis {
 
     /// [`SubPathMis::scatter`] at a medium vertex (no cosines, never specular) with solid-angle
     /// pdfs `forward` and `reverse` (Russian roulette included): eqs. 35, 36, 60, 61 with the
-    /// merge at this vertex counted with its volume η_V = η_A · (4/3) r (module doc).
+    /// merge at this vertex counted with its volume η_V = η_A · (4/3) r_V³/r² (module doc).
     pub fn scatter_medium(&mut self, forward: f32, reverse: f32, k: &MisConstants) {
         let g_over_p = 1.0 / forward;
         let v = k.volume_over_area;

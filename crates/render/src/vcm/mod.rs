@@ -68,7 +68,7 @@ use technique_images::{TechniqueFrame, TechniqueLayout, TechniqueValues};
 use wavelengths::{DEFAULT_WAVELENGTH_GROUPS, WavelengthSource};
 
 use radius::pixel_footprints;
-pub use radius::{RADIUS_REFERENCE_PIXELS, base_radius};
+pub use radius::{DEFAULT_VOLUME_RADIUS_FACTOR, RADIUS_REFERENCE_PIXELS, base_radius, base_volume_radius};
 
 /// The algorithms of the VCM engine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -229,8 +229,13 @@ pub struct VcmSettings {
     /// Initial merging radius as a fraction of the scene's merging scale
     /// ([`radius::MergingScale`]: its bounding-sphere radius, or the visible part's).
     pub radius_factor: f32,
-    /// Radius reduction α: r_i = r_0 · (i+1)^((α−1)/2).
+    /// Radius reduction α: r_i = r_0 · (i+1)^((α−1)/2); the volume radius follows
+    /// r_V,i = r_V,0 · (i+1)^((α−1)/3).
     pub radius_alpha: f32,
+    /// Initial merging radius at medium vertices (the 3-D kernel of volumetric photon points) as
+    /// a fraction of the scene's merging scale ([`radius::base_volume_radius`]); only scenes
+    /// with media use it.
+    pub volume_radius_factor: f32,
     /// Global (resolution-scaled), fixed or per-pixel radius.
     pub radius_mode: RadiusMode,
     /// Memory-efficient mode (after §6.2): only 44-byte merging records of the light vertices are
@@ -248,14 +253,16 @@ pub struct VcmSettings {
 }
 
 impl VcmSettings {
-    /// Defaults: radius factor 0.003, α = 0.75, 10 segments, global radius, two-stage mode,
-    /// [`DEFAULT_WAVELENGTH_GROUPS`] wavelength groups.
+    /// Defaults: radius factor 0.003, volume radius factor [`DEFAULT_VOLUME_RADIUS_FACTOR`],
+    /// α = 0.75, 10 segments, global radius, two-stage mode, [`DEFAULT_WAVELENGTH_GROUPS`]
+    /// wavelength groups.
     pub fn new(algorithm: VcmAlgorithm) -> Self {
         Self {
             algorithm,
             max_length: 10,
             radius_factor: 0.003,
             radius_alpha: 0.75,
+            volume_radius_factor: DEFAULT_VOLUME_RADIUS_FACTOR,
             radius_mode: RadiusMode::Global,
             memory_efficient: false,
             spectral: false,
@@ -272,8 +279,11 @@ pub struct Iteration<'a> {
     pub constants: MisConstants,
     /// Maximum path length in segments.
     pub max_length: u32,
-    /// Global merging radius (the grid's radius).
+    /// Global merging radius at surface vertices.
     pub radius: f32,
+    /// The radius the grid is built for: the largest radius any query asks for (the surface
+    /// radius, the volume radius in scenes with media, the largest per-pixel radius).
+    pub grid_radius: f32,
     /// Per-pixel radii of this iteration ([`RadiusMode::PerPixel`]).
     pub pixel_radii: Option<&'a [f32]>,
     /// Which families are on.
@@ -330,8 +340,10 @@ pub struct IterationStats {
     pub rejected: u64,
     /// The same, per technique family ([`Family`] order).
     pub rejected_by_family: RejectedCounts,
-    /// Global merging radius used.
+    /// Global merging radius used (surface vertices).
     pub radius: f32,
+    /// Merging radius at medium vertices (0 in scenes without media).
+    pub volume_radius: f32,
     /// Wall-clock time of the phases (two-stage mode only).
     pub phases: PhaseTimes,
 }
@@ -443,6 +455,8 @@ struct Engine<S: SpectralMode> {
     settings: VcmSettings,
     techniques: Techniques,
     base_radius: f32,
+    /// The volume radius before the schedule, in scenes with media.
+    base_volume_radius: Option<f32>,
     /// Per-pixel footprint radii before the iteration schedule (per-pixel mode).
     pixel_footprints: Option<Vec<f32>>,
     pixel_radii: Vec<f32>,
@@ -478,6 +492,7 @@ impl<S: SpectralMode> Engine<S> {
             settings,
             techniques: Techniques::of(settings.algorithm),
             base_radius,
+            base_volume_radius: scene.media.is_active().then(|| base_volume_radius(scene, &settings)),
             pixel_footprints,
             pixel_radii: Vec::new(),
             store: LightVertexStore::default(),
@@ -500,6 +515,15 @@ impl<S: SpectralMode> Engine<S> {
         (self.base_radius * self.schedule(iteration)).max(1e-7)
     }
 
+    /// The volume radius of iteration `iteration`, r_V,0 · (i+1)^((α−1)/3) (the 3-D analogue of
+    /// the surface schedule: the ball's volume shrinks as (i+1)^(α−1), as the disc's area does),
+    /// or `None` in scenes without media.
+    fn volume_radius(&self, iteration: u64) -> Option<f32> {
+        let base = self.base_volume_radius?;
+        let schedule = ((iteration.saturating_add(1)) as f32).powf((self.settings.radius_alpha - 1.0) / 3.0);
+        Some((base * schedule).max(1e-7))
+    }
+
     fn run_iteration(&mut self, scene: &Scene, seed: u64, iteration: u64, frame: &mut FrameBuffer) -> u64 {
         let pixel_count = frame.pixels.len();
         let techniques = self.techniques;
@@ -519,16 +543,14 @@ impl<S: SpectralMode> Engine<S> {
         let light_paths = pixel_count as f32;
         let across = groups > 1 && merges_across_groups(scene, groups);
         let merge_paths = if groups > 1 && !across { light_paths / groups as f32 } else { light_paths };
+        let constants =
+            MisConstants::with_merge_paths(light_paths, merge_paths, radius, techniques.connect, techniques.merge);
+        let volume_radius = self.volume_radius(iteration);
         let it = Iteration {
-            constants: MisConstants::with_merge_paths(
-                light_paths,
-                merge_paths,
-                radius,
-                techniques.connect,
-                techniques.merge,
-            ),
+            constants: volume_radius.map_or(constants, |r| constants.with_volume_radius(r)),
             max_length: self.settings.max_length,
             radius,
+            grid_radius: volume_radius.map_or(radius, |r| r.max(radius)),
             pixel_radii: self.pixel_footprints.as_ref().map(|_| pixel_radii.as_slice()),
             techniques,
             across_groups: across,
@@ -546,6 +568,7 @@ impl<S: SpectralMode> Engine<S> {
         self.stats.rejected = rejected.iter().sum();
         self.stats.rejected_by_family = rejected;
         self.stats.radius = radius;
+        self.stats.volume_radius = volume_radius.unwrap_or(0.0);
         self.stats.rejected
     }
 
@@ -572,7 +595,7 @@ impl<S: SpectralMode> Engine<S> {
                 &self.store.path_ends,
                 groups,
                 &mut self.grid,
-                it.radius,
+                it.grid_radius,
                 &mut self.merge_groups,
                 false,
             );
@@ -648,7 +671,7 @@ impl<S: SpectralMode> Engine<S> {
             let ends = trace_merge_records(scene, seed, iteration, &merging_only, pixel_count, sets, &mut self.records);
             let groups = sets.groups().map(|g| (g, it.constants.merge_path_count));
             let order =
-                build_grid(&self.records, &ends, groups, &mut self.grid, it.radius, &mut self.merge_groups, true);
+                build_grid(&self.records, &ends, groups, &mut self.grid, it.grid_radius, &mut self.merge_groups, true);
             drop(ends);
             let mut slots = Vec::new();
             light_vertex::slot_map(

@@ -110,6 +110,55 @@ pub fn base_radius(scene: &Scene, settings: &VcmSettings) -> f32 {
     }
 }
 
+/// The default volume radius factor ([`VcmSettings::volume_radius_factor`]): the merge ball at
+/// medium vertices over the volume scale ([`base_volume_radius`]; docs/media.md, "The volume
+/// radius", measured on `scenes/cornell-fog.xml` and Mitsuba's `participating_media` scenes).
+pub const DEFAULT_VOLUME_RADIUS_FACTOR: f32 = 0.025;
+
+/// The merging radius at medium vertices of the first iteration (world units):
+/// `volume_radius_factor` × the *volume scale*, times ∛([`RADIUS_REFERENCE_PIXELS`] / pixels)
+/// above the reference pixel count in [`RadiusMode::Global`] (a ball of radius r_V finds on
+/// average ∝ N_L r_V³ light vertices in a medium, which this scaling keeps constant).
+///
+/// The volume scale is the merging scale ([`MergingScale`]), or the bounding-sphere radius of
+/// the smallest bounded medium when that is smaller ([`smallest_medium_radius`]): the ball loses
+/// the part of it that lies outside the medium, so its radius must be small against the medium
+/// itself, not only against the view (a medium sphere of radius 0.8 in a scene seen over ±5
+/// units came out 5 % dark with the view-relative radius, docs/media.md).
+pub fn base_volume_radius(scene: &Scene, settings: &VcmSettings) -> f32 {
+    let view = MergingScale::of(scene).scale;
+    let scale = smallest_medium_radius(scene).map_or(view, |r| r.min(view));
+    let radius = settings.volume_radius_factor * scale;
+    let pixels = scene.camera.pixel_count() as u64;
+    if settings.radius_mode == RadiusMode::Global && pixels > RADIUS_REFERENCE_PIXELS {
+        radius * (RADIUS_REFERENCE_PIXELS as f64 / pixels as f64).cbrt() as f32
+    } else {
+        radius
+    }
+}
+
+/// The bounding-sphere radius of the smallest bounded medium (world units): a medium is bounded
+/// by the world primitives that name it as their *interior*, and its extent is the box around
+/// them. A medium that no primitive names as its interior (the camera's medium, or one named
+/// only outside objects) is unbounded and does not count; `None` when no medium is bounded.
+pub fn smallest_medium_radius(scene: &Scene) -> Option<f32> {
+    let media = &scene.media;
+    let mut boxes = vec![Aabb::EMPTY; media.media.len()];
+    for (primitive, interface) in scene.primitives.iter().zip(&media.interfaces) {
+        if let Some(inside) = interface.and_then(|i| i.interior)
+            && let Some(extent) = boxes.get_mut(inside as usize)
+        {
+            *extent = extent.union(primitive.shape.bounds());
+        }
+    }
+    boxes
+        .iter()
+        .filter(|b| !b.is_empty())
+        .map(|b| b.bounding_sphere().1)
+        .filter(|r| r.is_finite() && *r > 0.0)
+        .reduce(f32::min)
+}
+
 /// Per-pixel merging radii before the iteration schedule: the radius of a disc with the area
 /// of the pixel's footprint at the first surface hit by the ray through its centre (and the
 /// lens centre), [`scene::Camera::footprint_radius`]: `d·sqrt(cos³/π)/f` for perspective
