@@ -46,6 +46,15 @@ fn scene_with(name: &str, media: &str, resolution: u32) -> Scene {
 
 const FOG: &str = r#"<medium type="homogeneous" id="fog"><rgb name="sigma_t" value="1, 1, 1"/><rgb name="albedo" value="0.5, 0.5, 0.5"/></medium>"#;
 
+/// The fog and a sphere of radius 0.4 with BSDF `bsdf` that names the fog on its `side`
+/// (`interior` or `exterior`).
+fn fog_sphere(bsdf: &str, side: &str) -> String {
+    format!(
+        r#"{FOG}
+    <shape type="sphere"><float name="radius" value="0.4"/><bsdf type="{bsdf}"/><ref id="fog" name="{side}"/></shape>"#
+    )
+}
+
 #[test]
 fn the_fog_box_is_the_volume_scale_of_cornell_fog() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-fog.xml");
@@ -66,11 +75,7 @@ fn the_fog_box_is_the_volume_scale_of_cornell_fog() {
 fn a_small_medium_sets_the_volume_scale() {
     // A null sphere of radius 0.4 filled with fog in a scene seen over ±5 units: the ball must
     // be small against the sphere, not against the view.
-    let media = format!(
-        r#"{FOG}
-    <shape type="sphere"><float name="radius" value="0.4"/><bsdf type="null"/><ref id="fog" name="interior"/></shape>"#
-    );
-    let scene = scene_with("small", &media, 64);
+    let scene = scene_with("small", &fog_sphere("null", "interior"), 64);
     let small = smallest_medium_radius(&scene).unwrap();
     assert!((small - 0.4 * 3f32.sqrt()).abs() < 1e-5, "{small}");
     assert!(MergingScale::of(&scene).scale > 4.0 * small);
@@ -80,12 +85,8 @@ fn a_small_medium_sets_the_volume_scale() {
 
 #[test]
 fn a_medium_named_only_outside_objects_is_unbounded() {
-    // The camera sits in the fog, which fills the scene; a glass sphere names it as its exterior.
-    let media = format!(
-        r#"{FOG}
-    <shape type="sphere"><float name="radius" value="0.4"/><bsdf type="dielectric"/><ref id="fog" name="exterior"/></shape>"#
-    );
-    let scene = scene_with("outside", &media, 64);
+    // A glass sphere names the fog as its exterior: the fog around it has no bound.
+    let scene = scene_with("outside", &fog_sphere("dielectric", "exterior"), 64);
     assert_eq!(smallest_medium_radius(&scene), None);
     let radius = base_volume_radius(&scene, &settings(RadiusMode::Global));
     assert_eq!(radius, 0.025 * MergingScale::of(&scene).scale);

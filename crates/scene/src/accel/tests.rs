@@ -167,18 +167,12 @@ fn accel_brute_force_check_detects_a_slightly_wrong_tree() {
     assert!(shrunk >= 5, "boxes 5 % too small changed only {shrunk} answers");
 }
 
-/// Ties: copies of the same triangles under shuffled ids, and coplanar triangles sharing edges
-/// hit exactly at their shared vertices. The nearest hit must be the smallest id among equally
-/// near ones, whatever the traversal meets first; the previous binary traversal (first found)
-/// does not obey this rule, which shows that the test exercises it.
-#[test]
-fn accel_tie_rule_smallest_id_wins() {
-    let mut rng = Rng::for_stream(6, 0, 0);
-    // A grid of unit squares in z = 0, each split into two triangles, four copies of each
-    // triangle at scattered ids.
+/// A grid of `n` × `n` unit squares in z = 0, each split into two triangles, with four copies of
+/// each triangle at ids shuffled by `rng`: the tie-rule tests' scene.
+pub(super) fn shuffled_tie_grid(n: usize, rng: &mut Rng) -> Vec<Tri> {
     let mut base = Vec::new();
-    for i in 0..12 {
-        for j in 0..12 {
+    for i in 0..n {
+        for j in 0..n {
             let p = |di: usize, dj: usize| Vec3::new((i + di) as f32, (j + dj) as f32, 0.0);
             base.push([p(0, 0), p(1, 0), p(1, 1)]);
             base.push([p(0, 0), p(1, 1), p(0, 1)]);
@@ -189,6 +183,17 @@ fn accel_tie_rule_smallest_id_wins() {
         let j = (rng.uniform() * (i + 1) as f32) as usize % (i + 1);
         tris.swap(i, j);
     }
+    tris
+}
+
+/// Ties: copies of the same triangles under shuffled ids, and coplanar triangles sharing edges
+/// hit exactly at their shared vertices. The nearest hit must be the smallest id among equally
+/// near ones, whatever the traversal meets first; the previous binary traversal (first found)
+/// does not obey this rule, which shows that the test exercises it.
+#[test]
+fn accel_tie_rule_smallest_id_wins() {
+    let mut rng = Rng::for_stream(6, 0, 0);
+    let tris = shuffled_tie_grid(12, &mut rng);
     let bvh = Bvh::build(&triangle_bounds(&tris));
     let binary = BinaryBvh::build(&triangle_bounds(&tris));
     // Rays down at grid vertices (shared by up to 6 triangles × 4 copies) and at random points.

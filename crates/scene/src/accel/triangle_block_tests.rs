@@ -5,8 +5,8 @@
 //! degenerate triangles, and leaves mixing plain triangles with primitives of the closure.
 
 use super::tests::{
-    Tri, intersect_triangle, mismatches, random_direction, random_rays, random_soup, random_vec, triangle_bounds,
-    uv_sphere,
+    Tri, intersect_triangle, mismatches, random_direction, random_rays, random_soup, random_vec, shuffled_tie_grid,
+    triangle_bounds, uv_sphere,
 };
 use super::triangle_block::{RayLanes, TRIANGLES, TriangleBlock};
 use super::wide::{INTERIOR, WIDTH};
@@ -110,19 +110,7 @@ fn blocks_traverse_like_the_closure_tree() {
 #[test]
 fn blocks_keep_the_tie_rule() {
     let mut rng = Rng::for_stream(24, 0, 0);
-    let mut base = Vec::new();
-    for i in 0..8 {
-        for j in 0..8 {
-            let p = |di: usize, dj: usize| Vec3::new((i + di) as f32, (j + dj) as f32, 0.0);
-            base.push([p(0, 0), p(1, 0), p(1, 1)]);
-            base.push([p(0, 0), p(1, 1), p(0, 1)]);
-        }
-    }
-    let mut tris: Vec<Tri> = base.iter().flat_map(|t| [*t; 4]).collect();
-    for i in (1..tris.len()).rev() {
-        let j = (rng.uniform() * (i + 1) as f32) as usize % (i + 1);
-        tris.swap(i, j);
-    }
+    let tris = shuffled_tie_grid(8, &mut rng);
     let mut rays = Vec::new();
     for i in 0..=8 {
         for j in 0..=8 {
