@@ -54,14 +54,15 @@ fn malformed_messages_are_errors_naming_the_rank() {
 
 #[test]
 fn a_message_is_12_bytes_per_pixel_plus_a_fixed_header() {
-    // docs/distributed.md's communication cost: 12 B per pixel (f32 RGB) + 37 B, + 76 B of
-    // VCM statistics; + 80 B per pixel with family films, + 12 B per pixel and technique image.
+    // docs/distributed.md's communication cost: 12 B per pixel (f32 RGB) + 37 B, + 80 B of
+    // VCM statistics (both merging radii among them); + 80 B per pixel with family films,
+    // + 12 B per pixel and technique image.
     let mut r = result();
     let pixels = 6;
-    assert_eq!(encode_message(false, Some(&r)).len(), 37 + 76 + 12 * pixels + (8 + 80 * 6) + (8 + 12 * 12));
+    assert_eq!(encode_message(false, Some(&r)).len(), 37 + 80 + 12 * pixels + (8 + 80 * 6) + (8 + 12 * 12));
     r.family_values = None;
     r.technique_values = None;
-    assert_eq!(encode_message(false, Some(&r)).len(), 37 + 76 + 12 * pixels);
+    assert_eq!(encode_message(false, Some(&r)).len(), 37 + 80 + 12 * pixels);
     r.stats = None;
     assert_eq!(encode_message(false, Some(&r)).len(), 37 + 12 * pixels);
     assert_eq!(encode_message(true, None).len(), 2);
