@@ -21,7 +21,6 @@ pub struct Options {
     pub spectral: bool,
     pub radius_factor: Option<f32>,
     pub radius_alpha: Option<f32>,
-    pub volume_radius_factor: Option<f32>,
     pub radius_mode: String,
     pub memory_efficient: bool,
     /// `None`: the library's default (albedo); `file`: the scene file's rule
@@ -62,7 +61,6 @@ impl Options {
         request.spectral = self.spectral;
         request.radius_factor = self.radius_factor.unwrap_or(request.radius_factor);
         request.radius_alpha = self.radius_alpha.unwrap_or(request.radius_alpha);
-        request.volume_radius_factor = self.volume_radius_factor.unwrap_or(request.volume_radius_factor);
         request.radius_mode = session::radius_mode_from_name(&self.radius_mode).ok_or_else(|| {
             anyhow!("unknown radius_mode '{}': expected 'global', 'fixed' or 'per-pixel'", self.radius_mode)
         })?;

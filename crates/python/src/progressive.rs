@@ -47,7 +47,7 @@ impl Notices {
 #[pyfunction]
 #[pyo3(signature = (scene, algorithm = "vcm".to_string(), iterations = None, time = None, resolution = None,
     seed = 0, threads = None, max_length = None, spectral = false, radius_factor = None, radius_alpha = None,
-    volume_radius_factor = None, radius_mode = "global".to_string(), memory_efficient = false, rr_depth = None,
+    radius_mode = "global".to_string(), memory_efficient = false, rr_depth = None,
     heuristic = "balance".to_string(), light_sampler = "tree".to_string(), max_memory = None,
     permissive = false))]
 #[allow(clippy::too_many_arguments)]
@@ -64,7 +64,6 @@ pub fn render<'py>(
     spectral: bool,
     radius_factor: Option<f32>,
     radius_alpha: Option<f32>,
-    volume_radius_factor: Option<f32>,
     radius_mode: String,
     memory_efficient: bool,
     rr_depth: Option<String>,
@@ -84,7 +83,6 @@ pub fn render<'py>(
         spectral,
         radius_factor,
         radius_alpha,
-        volume_radius_factor,
         radius_mode,
         memory_efficient,
         rr_depth,
@@ -137,7 +135,7 @@ impl Session {
     #[new]
     #[pyo3(signature = (scene, algorithm = "vcm".to_string(), resolution = None, seed = 0, threads = None,
         max_length = None, spectral = false, radius_factor = None, radius_alpha = None,
-        volume_radius_factor = None, radius_mode = "global".to_string(), memory_efficient = false, rr_depth = None,
+        radius_mode = "global".to_string(), memory_efficient = false, rr_depth = None,
         heuristic = "balance".to_string(), light_sampler = "tree".to_string(), max_memory = None,
         permissive = false, techniques = false,
         technique_length = 4))]
@@ -153,7 +151,6 @@ impl Session {
         spectral: bool,
         radius_factor: Option<f32>,
         radius_alpha: Option<f32>,
-        volume_radius_factor: Option<f32>,
         radius_mode: String,
         memory_efficient: bool,
         rr_depth: Option<String>,
@@ -175,7 +172,6 @@ impl Session {
             spectral,
             radius_factor,
             radius_alpha,
-            volume_radius_factor,
             radius_mode,
             memory_efficient,
             rr_depth,
