@@ -101,11 +101,9 @@ impl MisConstants {
 
     /// These constants with the merge ball of medium vertices of radius `volume_radius` (r_V,
     /// scene units) instead of the surface radius r: η_V/η_A = (4/3) r_V³/r². The surface
-    /// quantities are unchanged; `volume_radius == r` gives exactly the single-radius constants.
+    /// quantities are unchanged; `volume_radius == r` gives exactly the single-radius constants
+    /// (the ratio is then exactly 1).
     pub fn with_volume_radius(self, volume_radius: f32) -> Self {
-        if volume_radius == self.radius {
-            return Self { volume_over_area: 4.0 / 3.0 * self.radius, volume_radius, ..self };
-        }
         let ratio = volume_radius / self.radius;
         Self { volume_over_area: 4.0 / 3.0 * volume_radius * ratio * ratio, volume_radius, ..self }
     }

@@ -101,10 +101,15 @@ pub fn visible_radius(scene: &Scene) -> Option<f32> {
 /// per pixel, over a disc of radius r: a query finds on average ∝ N_L r² light vertices, which
 /// this scaling keeps constant.)
 pub fn base_radius(scene: &Scene, settings: &VcmSettings) -> f32 {
-    let radius = settings.radius_factor * MergingScale::of(scene).scale;
+    global_shrink(settings.radius_factor * MergingScale::of(scene).scale, scene, settings, f64::sqrt)
+}
+
+/// `radius` times `root`([`RADIUS_REFERENCE_PIXELS`] / pixels) above the reference pixel count
+/// in [`RadiusMode::Global`] (√ for the disc, ∛ for the ball), else `radius` unchanged.
+fn global_shrink(radius: f32, scene: &Scene, settings: &VcmSettings, root: fn(f64) -> f64) -> f32 {
     let pixels = scene.camera.pixel_count() as u64;
     if settings.radius_mode == RadiusMode::Global && pixels > RADIUS_REFERENCE_PIXELS {
-        radius * (RADIUS_REFERENCE_PIXELS as f64 / pixels as f64).sqrt() as f32
+        radius * root(RADIUS_REFERENCE_PIXELS as f64 / pixels as f64) as f32
     } else {
         radius
     }
@@ -128,13 +133,7 @@ pub const DEFAULT_VOLUME_RADIUS_FACTOR: f32 = 0.025;
 pub fn base_volume_radius(scene: &Scene, settings: &VcmSettings) -> f32 {
     let view = MergingScale::of(scene).scale;
     let scale = smallest_medium_radius(scene).map_or(view, |r| r.min(view));
-    let radius = settings.volume_radius_factor * scale;
-    let pixels = scene.camera.pixel_count() as u64;
-    if settings.radius_mode == RadiusMode::Global && pixels > RADIUS_REFERENCE_PIXELS {
-        radius * (RADIUS_REFERENCE_PIXELS as f64 / pixels as f64).cbrt() as f32
-    } else {
-        radius
-    }
+    global_shrink(settings.volume_radius_factor * scale, scene, settings, f64::cbrt)
 }
 
 /// The bounding-sphere radius of the smallest bounded medium (world units): a medium is bounded
