@@ -83,21 +83,41 @@ pub fn spread_lattice(camera: &Camera, offset: [f32; 2], values: &mut [Rgb], str
     };
     let (wx, wy) = (weights(offset[0]), weights(offset[1]));
     let row_len = width * stride;
-    // Along the rows: each pixel x gathers the samples x − d of its row.
+    let last_tap = 2 * reach;
+    // Along the rows: each pixel x gathers the samples x + reach − k of its row, k = 0..=2·reach
+    // in increasing order; taps outside the row are skipped. Non-finite values are replaced by
+    // black first, which adds exactly zero where the pairwise sum skipped them.
     let mut along_rows = vec![Rgb::BLACK; values.len()];
-    along_rows.par_chunks_mut(row_len).zip(values.par_chunks(row_len)).for_each(|(out, source)| {
-        for x in 0..width {
-            for (k, w) in wx.iter().enumerate() {
-                let Some(sx) = (x + reach).checked_sub(k).filter(|&sx| sx < width) else { continue };
-                for c in 0..stride {
-                    let v = source[sx * stride + c];
-                    if v.is_finite() {
-                        out[x * stride + c] += v * *w;
+    along_rows.par_chunks_mut(row_len).zip(values.par_chunks(row_len)).for_each_init(
+        || Vec::with_capacity(row_len),
+        |clean: &mut Vec<Rgb>, (out, source)| {
+            clean.clear();
+            clean.extend(source.iter().map(|v| if v.is_finite() { *v } else { Rgb::BLACK }));
+            for x in 0..width {
+                // sx = x + reach − k lies in [0, width) for k in first..=last.
+                let first = (x + reach + 1).saturating_sub(width);
+                let last = last_tap.min(x + reach);
+                let taps = &wx[first..=last];
+                if stride == 1 {
+                    // The samples x + reach − last ..= x + reach − first, met from the last.
+                    let window = &clean[x + reach - last..=x + reach - first];
+                    let mut sum = Rgb::BLACK;
+                    for (w, v) in taps.iter().zip(window.iter().rev()) {
+                        sum += *v * *w;
                     }
+                    out[x] = sum;
+                    continue;
+                }
+                for c in 0..stride {
+                    let mut sum = Rgb::BLACK;
+                    for (i, w) in taps.iter().enumerate() {
+                        sum += clean[(x + reach - first - i) * stride + c] * *w;
+                    }
+                    out[x * stride + c] = sum;
                 }
             }
-        }
-    });
+        },
+    );
     // N_j per axis (the product is Camera::splat_normalization).
     let nx: Vec<f64> = (0..width).map(|x| filter.clipped_integral_1d(x as f32 + 0.5, width as f32)).collect();
     let ny: Vec<f64> = (0..height).map(|y| filter.clipped_integral_1d(y as f32 + 0.5, height as f32)).collect();

@@ -1,9 +1,9 @@
 //! The slab test of one ray against the four child boxes of a wide node at once.
 //!
-//! Written lane by lane over `[f32; 4]` arrays without branches, so that the compiler turns each
-//! step into one SSE instruction (`subps`, `mulps`, `maxps`, `minps`, `cmpps`); no `unsafe`
-//! intrinsics.
+//! Written with glam's `Vec4`, so that each step is one SSE instruction (`subps`, `mulps`,
+//! `maxps`, `minps`, `cmpps`); no `unsafe` intrinsics in our code.
 
+use glam::Vec4;
 use math::Ray;
 
 use super::wide::{WIDTH, WideNode};
@@ -12,10 +12,10 @@ use super::wide::{WIDTH, WideNode};
 /// never reject a box the ray touches (Ize 2013: `1 + 2γ₃`, rounded up).
 pub(super) const ROBUST_EXIT: f32 = 1.0 + 4.0 * f32::EPSILON;
 
-/// Ray data precomputed for the slab test.
+/// Ray data precomputed for the slab test, each component splatted over the four lanes.
 pub(super) struct RayBox {
-    origin: [f32; 3],
-    inverse_direction: [f32; 3],
+    origin: [Vec4; 3],
+    inverse_direction: [Vec4; 3],
     /// Per axis, the corner (0 = lower, 1 = upper) that holds the near plane: the lower one when
     /// the direction component's sign bit is clear.
     near: [usize; 3],
@@ -26,9 +26,14 @@ impl RayBox {
     pub(super) fn new(ray: &Ray) -> Self {
         let d = ray.direction;
         // Zero components give ±∞ (by the sign of the zero), which the slab test handles.
-        let inverse_direction = [1.0 / d.x, 1.0 / d.y, 1.0 / d.z];
+        let inverse = [1.0 / d.x, 1.0 / d.y, 1.0 / d.z];
         let near = [d.x.is_sign_negative() as usize, d.y.is_sign_negative() as usize, d.z.is_sign_negative() as usize];
-        Self { origin: ray.origin.to_array(), inverse_direction, near }
+        let o = ray.origin;
+        Self {
+            origin: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
+            inverse_direction: inverse.map(Vec4::splat),
+            near,
+        }
     }
 
     /// Per lane, the distance at which the ray enters the child box within `(0, t_max]`, or
@@ -39,25 +44,22 @@ impl RayBox {
     /// ray counts as inside that slab, which is the correct answer for an origin on the plane.
     #[inline(always)]
     pub(super) fn entries(&self, node: &WideNode, t_max: f32) -> [f32; WIDTH] {
-        let mut t_enter = [0.0f32; WIDTH];
-        let mut t_exit = [t_max; WIDTH];
+        let mut t_enter = Vec4::ZERO;
+        let mut t_exit = Vec4::splat(t_max);
         for axis in 0..3 {
             let near_corner = self.near[axis] & 1;
-            let near = &node.corners[near_corner][axis];
-            let far = &node.corners[near_corner ^ 1][axis];
+            let near = Vec4::from_array(node.corners[near_corner][axis]);
+            let far = Vec4::from_array(node.corners[near_corner ^ 1][axis]);
             let (origin, inverse) = (self.origin[axis], self.inverse_direction[axis]);
-            for lane in 0..WIDTH {
-                let t_near = (near[lane] - origin) * inverse;
-                let t_far = (far[lane] - origin) * inverse;
-                // `x > acc` is false for NaN x, so NaN is ignored (this is `maxps(x, acc)`).
-                t_enter[lane] = if t_near > t_enter[lane] { t_near } else { t_enter[lane] };
-                t_exit[lane] = if t_far < t_exit[lane] { t_far } else { t_exit[lane] };
-            }
+            let t_near = (near - origin) * inverse;
+            let t_far = (far - origin) * inverse;
+            // Per lane `if t_near > t_enter { t_near } else { t_enter }` (one `maxps`, whose
+            // second operand wins on NaN and on equality), and the same for the exit with `<`
+            // (`minps`): a NaN plane distance is ignored. `t_enter` and `t_exit` are never NaN.
+            t_enter = t_near.max(t_enter);
+            t_exit = t_far.min(t_exit);
         }
-        let mut result = [f32::INFINITY; WIDTH];
-        for lane in 0..WIDTH {
-            result[lane] = if t_enter[lane] <= t_exit[lane] * ROBUST_EXIT { t_enter[lane] } else { f32::INFINITY };
-        }
-        result
+        let hit = t_enter.cmple(t_exit * ROBUST_EXIT);
+        Vec4::select(hit, t_enter, Vec4::INFINITY).to_array()
     }
 }
