@@ -83,41 +83,29 @@ pub fn spread_lattice(camera: &Camera, offset: [f32; 2], values: &mut [Rgb], str
     };
     let (wx, wy) = (weights(offset[0]), weights(offset[1]));
     let row_len = width * stride;
-    let last_tap = 2 * reach;
-    // Along the rows: each pixel x gathers the samples x + reach − k of its row, k = 0..=2·reach
-    // in increasing order; taps outside the row are skipped. Non-finite values are replaced by
-    // black first, which adds exactly zero where the pairwise sum skipped them.
+    // Non-finite values count as black: replaced in place (the values are overwritten by the
+    // result below), which adds exactly zero where the pairwise sum skipped them.
+    values.par_iter_mut().filter(|v| !v.is_finite()).for_each(|v| *v = Rgb::BLACK);
+    // Along the rows: each pixel x gathers the samples sx = x + reach − k of its row for
+    // k = 0..=2·reach, in increasing k (tap k outer, so each pass is a contiguous multiply-add
+    // that vectorises, and every pixel still sums its taps in the pairwise order); taps outside
+    // the row are skipped.
     let mut along_rows = vec![Rgb::BLACK; values.len()];
-    along_rows.par_chunks_mut(row_len).zip(values.par_chunks(row_len)).for_each_init(
-        || Vec::with_capacity(row_len),
-        |clean: &mut Vec<Rgb>, (out, source)| {
-            clean.clear();
-            clean.extend(source.iter().map(|v| if v.is_finite() { *v } else { Rgb::BLACK }));
-            for x in 0..width {
-                // sx = x + reach − k lies in [0, width) for k in first..=last.
-                let first = (x + reach + 1).saturating_sub(width);
-                let last = last_tap.min(x + reach);
-                let taps = &wx[first..=last];
-                if stride == 1 {
-                    // The samples x + reach − last ..= x + reach − first, met from the last.
-                    let window = &clean[x + reach - last..=x + reach - first];
-                    let mut sum = Rgb::BLACK;
-                    for (w, v) in taps.iter().zip(window.iter().rev()) {
-                        sum += *v * *w;
-                    }
-                    out[x] = sum;
-                    continue;
-                }
-                for c in 0..stride {
-                    let mut sum = Rgb::BLACK;
-                    for (i, w) in taps.iter().enumerate() {
-                        sum += clean[(x + reach - first - i) * stride + c] * *w;
-                    }
-                    out[x * stride + c] = sum;
-                }
+    along_rows.par_chunks_mut(row_len).zip(values.par_chunks(row_len)).for_each(|(out, source)| {
+        for (k, &w) in wx.iter().enumerate() {
+            // sx ∈ [0, width) ⇔ x ∈ [k − reach, width + k − reach).
+            let x_first = k.saturating_sub(reach);
+            let x_end = (width + k).saturating_sub(reach).min(width);
+            if x_first >= x_end {
+                continue;
             }
-        },
-    );
+            let n = (x_end - x_first) * stride;
+            let sources = &source[(x_first + reach - k) * stride..][..n];
+            for (o, v) in out[x_first * stride..][..n].iter_mut().zip(sources) {
+                *o += *v * w;
+            }
+        }
+    });
     // N_j per axis (the product is Camera::splat_normalization).
     let nx: Vec<f64> = (0..width).map(|x| filter.clipped_integral_1d(x as f32 + 0.5, width as f32)).collect();
     let ny: Vec<f64> = (0..height).map(|y| filter.clipped_integral_1d(y as f32 + 0.5, height as f32)).collect();
