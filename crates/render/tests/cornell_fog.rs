@@ -31,17 +31,18 @@
 //!
 //! **Not here: `bpm`.** Before the volume radius existed (the ball had the surface radius) its
 //! rare, large volumetric merges left block ratios to bpt from 0.72 to 1.29 after 10 000
-//! iterations at 32² (r = 0.01 R). With the volume radius its estimates are well behaved, and
-//! with the blocks and radii of ppm it agrees with bpt on 33 of the 34 blocks, but not on block
-//! (0, 6), the red wall seen at about 70° near the floor, in the blue channel (where the wall is
-//! dark and the fog's light dominates): z = −5.3 at the default volume radius and 2000
-//! iterations at 128² (power 3.9 %), z = −8.2 at 0.4 × the default radius and 5000 iterations.
-//! The deficit does not shrink with the volume radius, so it is not the ball reaching through
-//! the wall; the surface disc (r = 0.01 R) at the vertices bpm merges after the first, which
-//! the clearance rule does not look at, is the suspect, not yet separated. bpm's agreement in
-//! media is tested in the fog rooms of `vcm_media.rs` and `vcm_grid_media.rs`. (Measured with
-//! this test's comparison on the bpm plan `Plan { algorithm: "bpm", scale: 4, iterations,
-//! radius_factor: PPM_RADIUS_FACTOR, volume_radius_factor }`.)
+//! iterations at 32² (r = 0.01 R). With the volume radius its estimates are better behaved but
+//! still heavy-tailed, and a per-block z-test with the sample standard error is not a fair
+//! test of it at an affordable budget. Measured 2026-11-28 with this module's `estimate` at
+//! 128² (bpm, seed 2, default volume radius) against `bpt` at 32² and 8000 iterations: after
+//! 1000 iterations the red wall near the floor came out low in green and blue by 9–18 % (z down
+//! to −5.3) at surface radii 0.01, 0.003 and 0.001 R alike, and vcm agreed on the same
+//! blocks within 0.5 % (z > −1.5, against `bpt` of another seed); after 3000 iterations (r =
+//! 0.003 R) that block agreed (blue −1.1 %, z −0.3) and its neighbour below was the low one
+//! (−7.0 %, z −3.0). The per-iteration block values have a skewness of 8–18, and the largest
+//! 1 % of the iterations carry 11–17 % of a block's total: a mean over too few iterations is
+//! usually low and its standard error too small. bpm's agreement in media is tested in the
+//! fog rooms of `vcm_media.rs` and `vcm_grid_media.rs`.
 
 mod common;
 
