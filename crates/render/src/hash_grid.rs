@@ -97,15 +97,8 @@ impl CellMap {
     /// neighbouring camera vertices, then read nearby memory. Blocks are spread by a hash.
     #[inline]
     fn bucket(&self, x: u32, y: u32, z: u32) -> u32 {
-        let low = (x & 1) | (y & 1) << 1 | (z & 1) << 2 | (x & 2) << 2 | (y & 2) << 3 | (z & 2) << 4;
-        let (x, y, z) = (x >> 2, y >> 2, z >> 2);
-        // Pack (coordinates beyond 21 bits overlap; that is only a collision), then mix with the
-        // SplitMix64 finaliser and keep high bits.
-        let mut h = u64::from(x) ^ (u64::from(y) << 21) ^ (u64::from(z) << 42);
-        h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        h ^= h >> 31;
-        (((h >> 32) as u32) << 6 | low) & self.bucket_mask
+        let low = morton_low(x) | morton_low(y) << 1 | morton_low(z) << 2;
+        (block_hash(x >> 2, y >> 2, z >> 2) << 6 | low) & self.bucket_mask
     }
 
     /// Bucket of a (finite) point.
@@ -114,6 +107,25 @@ impl CellMap {
         let s = self.scaled(p);
         self.bucket(self.cell(s.x, 0), self.cell(s.y, 1), self.cell(s.z, 2))
     }
+}
+
+/// Bits 0 and 1 of a cell coordinate spread to bits 0 and 3: a cell's place in its 4×4×4 block
+/// is `morton_low(x) | morton_low(y) << 1 | morton_low(z) << 2` (Morton order).
+#[inline]
+fn morton_low(c: u32) -> u32 {
+    (c & 1) | (c & 2) << 2
+}
+
+/// The hash of the 4×4×4 block `(x, y, z)` (cell coordinates over 4): the coordinates packed
+/// (beyond 21 bits they overlap; that is only a collision), mixed with the SplitMix64 finaliser,
+/// high bits kept.
+#[inline]
+fn block_hash(x: u32, y: u32, z: u32) -> u32 {
+    let mut h = u64::from(x) ^ (u64::from(y) << 21) ^ (u64::from(z) << 42);
+    h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    h ^= h >> 31;
+    (h >> 32) as u32
 }
 
 /// A hashed uniform grid over points, cell size (about) `2r`, built for one radius `r`.
@@ -414,22 +426,24 @@ impl HashGrid {
         mut visit: impl FnMut(usize),
     ) {
         let radius_sq = (radius * radius).min(self.radius_sq);
-        let kept = self.keeps_positions();
-        self.for_each_bucket(query, |start, end| {
-            let (first, last) = match &indices {
-                None => (start, end),
-                Some(range) => self.index_range(start, end, range),
-            };
-            if kept {
-                self.visit_slice(first, last, query, radius_sq, &mut visit);
-            } else {
-                for slot in first..last {
-                    if (position(slot) - query).length_squared() <= radius_sq {
-                        visit(slot);
+        match (indices, self.keeps_positions()) {
+            (None, true) => self.for_each_slot(query, radius_sq, visit),
+            (indices, kept) => self.for_each_bucket(query, |start, end| {
+                let (first, last) = match &indices {
+                    None => (start, end),
+                    Some(range) => self.index_range(start, end, range),
+                };
+                if kept {
+                    self.visit_slice(first, last, query, radius_sq, &mut visit);
+                } else {
+                    for slot in first..last {
+                        if (position(slot) - query).length_squared() <= radius_sq {
+                            visit(slot);
+                        }
                     }
                 }
-            }
-        });
+            }),
+        }
     }
 
     /// The slots `first..last` within bucket slots `start..end` whose indices lie in `range`.
@@ -501,54 +515,121 @@ impl HashGrid {
     }
 
     /// Visits the slots of the points within `sqrt(radius_sq)` (at most the build radius).
+    #[inline]
     fn for_each_slot(&self, query: Vec3, radius_sq: f32, mut visit: impl FnMut(usize)) {
-        self.for_each_bucket(query, |start, end| self.visit_slice(start, end, query, radius_sq, &mut visit));
+        let mut ranges = [(0u32, 0u32); MAX_QUERY_CELLS];
+        // Scanning every bucket in slot order is scanning every slot.
+        let count = self.query_buckets(query, &mut ranges);
+        let ranges = match count {
+            Some(count) => &ranges[..count],
+            None => &[(0, self.sorted_positions.len() as u32)][..],
+        };
+        for &(start, end) in ranges {
+            self.visit_slice(start as usize, end as usize, query, radius_sq, &mut visit);
+        }
     }
 
-    /// Calls `visit(start, end)` with the slot range of every distinct bucket a query at
-    /// `query` must look at (each range lies within one bucket).
+    /// Calls `visit(start, end)` with the slot range of every distinct non-empty bucket a query
+    /// at `query` must look at (each range lies within one bucket), in the order of the cells
+    /// (`x` fastest, then `y`, then `z`; a bucket at its first cell).
+    #[inline]
     fn for_each_bucket(&self, query: Vec3, mut visit: impl FnMut(usize, usize)) {
+        let mut ranges = [(0u32, 0u32); MAX_QUERY_CELLS];
+        let count = match self.query_buckets(query, &mut ranges) {
+            Some(count) => count,
+            None => {
+                // Only when float precision is exhausted (points spread over > ~10⁷ cells):
+                // every bucket, in slot order.
+                for bucket in self.starts.windows(2) {
+                    if bucket[0] < bucket[1] {
+                        visit(bucket[0] as usize, bucket[1] as usize);
+                    }
+                }
+                return;
+            }
+        };
+        for &(start, end) in &ranges[..count] {
+            visit(start as usize, end as usize);
+        }
+    }
+
+    /// Writes to `ranges` the slot ranges of the distinct non-empty buckets of the cells a query
+    /// at `query` looks at (in [`HashGrid::for_each_bucket`]'s order) and returns their number,
+    /// or `None` when the query must scan every bucket (more than [`MAX_QUERY_CELLS`] cells).
+    #[inline]
+    fn query_buckets(&self, query: Vec3, ranges: &mut [(u32, u32); MAX_QUERY_CELLS]) -> Option<usize> {
         if self.indices.is_empty() || !query.is_finite() {
-            return;
+            return Some(0);
         }
         let map = &self.map;
         let lo = map.scaled(query - Vec3::splat(self.search_extent));
         let hi = map.scaled(query + Vec3::splat(self.search_extent));
-        let mut ranges = [(0u32, 0u32); 3];
+        let mut cells = [(0u32, 0u32); 3];
         let mut cell_count = 1u64;
-        for (axis, range) in ranges.iter_mut().enumerate() {
+        for (axis, range) in cells.iter_mut().enumerate() {
             // Every point p has 0 <= scaled(p) <= max_scaled; monotonicity does the rest.
             if !(hi[axis] >= 0.0 && lo[axis] <= map.max_scaled[axis]) {
-                return;
+                return Some(0);
             }
             *range = (map.cell(lo[axis].max(0.0), axis), map.cell(hi[axis], axis));
             cell_count *= u64::from(range.1 - range.0) + 1;
         }
         if cell_count > MAX_QUERY_CELLS as u64 {
-            // Only when float precision is exhausted (points spread over > ~10⁷ cells): every
-            // bucket, in slot order.
-            for bucket in self.starts.windows(2) {
-                visit(bucket[0] as usize, bucket[1] as usize);
-            }
-            return;
+            return None;
         }
-
+        let mut count = 0;
+        let mut push = |bucket: u32| {
+            let (start, end) = (self.starts[bucket as usize], self.starts[bucket as usize + 1]);
+            if start < end {
+                ranges[count] = (start, end);
+                count += 1;
+            }
+        };
+        // With at least 64 buckets a bucket keeps its cell's 6 low (Morton) bits, which hold
+        // bits 0 and 1 of every coordinate: cells whose coordinates differ by 1 or 2 on some
+        // axis never share a bucket. So when every axis spans at most two cells (the normal
+        // case) the buckets are distinct, and each 4×4×4 block's hash is computed once.
+        let narrow = cells.iter().all(|&(first, last)| last - first <= 1);
+        if narrow && map.bucket_mask >= 63 {
+            let [(x0, x1), (y0, y1), (z0, z1)] = cells;
+            let (bx0, bx1) = (x0 >> 2, x1 >> 2);
+            let mut row: Option<(u32, u32, u32, u32)> = None;
+            for z in z0..=z1 {
+                for y in y0..=y1 {
+                    let (by, bz) = (y >> 2, z >> 2);
+                    let (h0, h1) = match row {
+                        Some((ry, rz, h0, h1)) if (ry, rz) == (by, bz) => (h0, h1),
+                        _ => {
+                            let h0 = block_hash(bx0, by, bz);
+                            let h1 = if bx1 == bx0 { h0 } else { block_hash(bx1, by, bz) };
+                            row = Some((by, bz, h0, h1));
+                            (h0, h1)
+                        }
+                    };
+                    let low_yz = morton_low(y) << 1 | morton_low(z) << 2;
+                    push((h0 << 6 | morton_low(x0) | low_yz) & map.bucket_mask);
+                    if x1 != x0 {
+                        push((h1 << 6 | morton_low(x1) | low_yz) & map.bucket_mask);
+                    }
+                }
+            }
+            return Some(count);
+        }
         let mut buckets = [0u32; MAX_QUERY_CELLS];
-        let mut bucket_count = 0;
-        for z in ranges[2].0..=ranges[2].1 {
-            for y in ranges[1].0..=ranges[1].1 {
-                for x in ranges[0].0..=ranges[0].1 {
+        let mut distinct = 0;
+        for z in cells[2].0..=cells[2].1 {
+            for y in cells[1].0..=cells[1].1 {
+                for x in cells[0].0..=cells[0].1 {
                     let bucket = map.bucket(x, y, z);
-                    if !buckets[..bucket_count].contains(&bucket) {
-                        buckets[bucket_count] = bucket;
-                        bucket_count += 1;
+                    if !buckets[..distinct].contains(&bucket) {
+                        buckets[distinct] = bucket;
+                        distinct += 1;
+                        push(bucket);
                     }
                 }
             }
         }
-        for &bucket in &buckets[..bucket_count] {
-            visit(self.starts[bucket as usize] as usize, self.starts[bucket as usize + 1] as usize);
-        }
+        Some(count)
     }
 
     #[inline]
@@ -767,6 +848,71 @@ mod tests {
             assert!(grid.starts.len() <= limit + 1);
             let qs = queries(&grid, &points, radius, 8);
             check_against_brute_force(&grid, &points, radius, &qs);
+        }
+    }
+
+    /// The buckets of a query as the first implementation listed them: every cell of the block
+    /// hashed on its own, in `x`, `y`, `z` order, each bucket at its first cell, the empty ones
+    /// dropped (they visit nothing); `None` for the scan-everything fallback.
+    fn reference_buckets(grid: &HashGrid, query: Vec3) -> Option<Vec<(u32, u32)>> {
+        let map = &grid.map;
+        if grid.indices.is_empty() || !query.is_finite() {
+            return Some(Vec::new());
+        }
+        let lo = map.scaled(query - Vec3::splat(grid.search_extent));
+        let hi = map.scaled(query + Vec3::splat(grid.search_extent));
+        let mut cells = [(0u32, 0u32); 3];
+        for (axis, range) in cells.iter_mut().enumerate() {
+            if !(hi[axis] >= 0.0 && lo[axis] <= map.max_scaled[axis]) {
+                return Some(Vec::new());
+            }
+            *range = (map.cell(lo[axis].max(0.0), axis), map.cell(hi[axis], axis));
+        }
+        if cells.iter().map(|&(a, b)| u64::from(b - a) + 1).product::<u64>() > MAX_QUERY_CELLS as u64 {
+            return None;
+        }
+        let mut buckets = Vec::new();
+        for z in cells[2].0..=cells[2].1 {
+            for y in cells[1].0..=cells[1].1 {
+                for x in cells[0].0..=cells[0].1 {
+                    let bucket = map.bucket(x, y, z);
+                    if !buckets.contains(&bucket) {
+                        buckets.push(bucket);
+                    }
+                }
+            }
+        }
+        let ranges = buckets.iter().map(|&b| (grid.starts[b as usize], grid.starts[b as usize + 1]));
+        Some(ranges.filter(|&(start, end)| start < end).collect())
+    }
+
+    /// A query lists the same bucket ranges in the same order as [`reference_buckets`] (merged
+    /// values are summed in visit order, so images depend on it), with and without collisions
+    /// and for the fallback.
+    #[test]
+    fn query_buckets_keep_the_reference_order() {
+        let clustered = clustered_points(4_000, 4);
+        let mut spread = uniform_points(2_000, 3, Vec3::ZERO, Vec3::ONE);
+        spread.extend(uniform_points(2_000, 4, Vec3::splat(1e7), Vec3::splat(1e7 + 8.0)));
+        spread.push(Vec3::splat(-1e8));
+        spread.extend(uniform_points(500, 5, Vec3::splat(3.9), Vec3::splat(4.1)));
+        for (points, radius, limit) in [
+            (&clustered, 0.02, usize::MAX),
+            (&clustered, 0.003, usize::MAX),
+            (&clustered, 0.02, 64),
+            (&clustered, 0.02, 32),
+            (&clustered, 0.02, 4),
+            (&spread, 0.05, usize::MAX),
+        ] {
+            let mut grid = HashGrid::with_bucket_limit(limit);
+            grid.build(points, radius);
+            let mut qs = queries(&grid, points, radius, 12);
+            qs.extend([Vec3::splat(4.0), Vec3::new(4.0, 3.95, 4.02), Vec3::NAN, Vec3::splat(-5.0)]);
+            for q in qs {
+                let mut ranges = [(0, 0); MAX_QUERY_CELLS];
+                let got = grid.query_buckets(q, &mut ranges).map(|n| ranges[..n].to_vec());
+                assert_eq!(got, reference_buckets(&grid, q), "query {q}, radius {radius}, limit {limit}");
+            }
         }
     }
 

@@ -9,7 +9,7 @@ use crate::fluorescent::FluorescentVertex;
 
 use super::Iteration;
 use super::connect::{LightEnd, Splat, connect_emitter_to_camera, connect_to_camera};
-use super::light_vertex::{LightVertex, VertexData};
+use super::light_vertex::{LightVertex, NormalCodes, VertexData};
 use super::medium::{Arrival, Flight, MediumSide, Scatterer, advance};
 use super::mis::SubPathMis;
 use super::subpath::{NullSurface, SubPath};
@@ -18,7 +18,8 @@ use super::subpath::{NullSurface, SubPath};
 const CAMERA_CONNECTIONS: u64 = 0x6361_6d65_7261;
 
 /// Traces one light sub-path: appends its stored vertices to `vertices` and its camera
-/// connections to `splats`.
+/// connections to `splats`. `codes` caches the codes of the stored normals (pass the same one
+/// for the light sub-paths traced one after another).
 ///
 /// The walk draws from `rng`; the camera connections draw from a generator seeded by the walk's
 /// first two numbers, so the walk (and the stored vertices) are the same whether or not the
@@ -31,6 +32,7 @@ pub fn trace_light_path<S: SpectralMode>(
     vertices: &mut Vec<LightVertex<S>>,
     splats: &mut Vec<Splat>,
     wavelengths: &S::Wavelengths,
+    codes: &mut NormalCodes,
 ) {
     let hero = S::hero_wavelength(wavelengths);
     let k = &it.constants;
@@ -123,7 +125,7 @@ pub fn trace_light_path<S: SpectralMode>(
 
         if !bsdf.is_delta() {
             if techniques.store_light_vertices() {
-                vertices.push(LightVertex::new(&VertexData {
+                let data = VertexData {
                     position: hit.position,
                     throughput: path.throughput,
                     mis: path.mis,
@@ -137,7 +139,8 @@ pub fn trace_light_path<S: SpectralMode>(
                     fixed,
                     continuation: bsdf.continuation_probability(),
                     terminated: path.terminated,
-                }));
+                };
+                vertices.push(LightVertex::with_normal_codes(&data, codes));
             }
             if techniques.connect_to_camera() && path.path_length < it.max_length {
                 let endpoint = LightEnd {

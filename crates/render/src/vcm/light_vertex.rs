@@ -185,10 +185,56 @@ pub struct VertexData<S> {
     pub terminated: bool,
 }
 
+/// Number of entries of a [`NormalCodes`] cache (a power of two).
+const NORMAL_CODES: usize = 16;
+
+/// The octahedral codes of recently stored normals, so that the light vertices on one flat
+/// surface (a wall, a triangle) encode their common normal once: a direct-mapped cache keyed by
+/// the normal's exact bits, whose hits return the code [`octahedral::encode`] gives, bit for bit
+/// (encoding is a pure function of those bits). Keep one per sequence of light sub-paths traced
+/// together (a chunk of the light pass).
+#[derive(Clone, Debug, Default)]
+pub struct NormalCodes {
+    /// Per entry: the bits of a normal's coordinates and its code (`None`: empty).
+    entries: [Option<([u32; 3], u32)>; NORMAL_CODES],
+}
+
+impl NormalCodes {
+    /// `octahedral::encode(normal)`, from the cache when `normal` was encoded recently.
+    #[inline]
+    pub fn encode(&mut self, normal: Vec3) -> u32 {
+        let bits = [normal.x.to_bits(), normal.y.to_bits(), normal.z.to_bits()];
+        let mixed = (bits[0] ^ bits[1].rotate_left(11) ^ bits[2].rotate_left(22)).wrapping_mul(0x9e37_79b9);
+        let entry = &mut self.entries[(mixed >> 28) as usize % NORMAL_CODES];
+        match *entry {
+            Some((key, code)) if key == bits => code,
+            _ => {
+                let code = octahedral::encode(normal);
+                *entry = Some((bits, code));
+                code
+            }
+        }
+    }
+}
+
 impl<S: SpectralMode> LightVertex<S> {
     /// Packs `data` into a record.
     #[inline]
     pub fn new(data: &VertexData<S>) -> Self {
+        Self::pack(data, octahedral::encode)
+    }
+
+    /// Packs `data` into a record like [`LightVertex::new`] (the same record, bit for bit),
+    /// taking the codes of its normals from `codes`.
+    #[inline]
+    pub fn with_normal_codes(data: &VertexData<S>, codes: &mut NormalCodes) -> Self {
+        Self::pack(data, |normal| codes.encode(normal))
+    }
+
+    /// Packs `data` into a record, its normals encoded by `encode_normal`
+    /// ([`octahedral::encode`] or a cache of it).
+    #[inline]
+    fn pack(data: &VertexData<S>, mut encode_normal: impl FnMut(Vec3) -> u32) -> Self {
         let packed = data.path_length.min(MAX_PATH_LENGTH)
             | if data.terminated { TERMINATED } else { 0 }
             | pack_continuation(data.continuation) << CONTINUATION_SHIFT;
@@ -201,10 +247,10 @@ impl<S: SpectralMode> LightVertex<S> {
             fixed: octahedral::encode(data.fixed),
             packed,
         };
-        let normal = octahedral::encode(data.normal);
+        let normal = encode_normal(data.normal);
         // Without a shading normal both are the same vector: one encoding (the most frequent case).
         let shading_normal =
-            if data.shading_normal == data.normal { normal } else { octahedral::encode(data.shading_normal) };
+            if data.shading_normal == data.normal { normal } else { encode_normal(data.shading_normal) };
         Self {
             record,
             material: data.material.min(MAX_MATERIAL),
@@ -506,6 +552,22 @@ pub fn permute<T>(items: &mut [T], slots: &[u32]) {
 mod tests {
     use super::*;
     use spectrum::Hero4;
+
+    /// The cache gives `octahedral::encode`'s code for every normal: repeated ones (hits), new
+    /// ones that evict others, and ones equal as vectors but not in bits (±0).
+    #[test]
+    fn cached_normal_codes_are_the_encoded_ones() {
+        let mut rng = math::Rng::for_stream(5, 0, 0);
+        let mut codes = NormalCodes::default();
+        let axes = [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z, Vec3::new(-0.0, 1.0, 0.0)];
+        let random: Vec<Vec3> = (0..40)
+            .map(|_| Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5).normalize())
+            .collect();
+        for round in 0..2000 {
+            let n = if round % 3 == 0 { axes[round % axes.len()] } else { random[rng.next_u32() as usize % 40] };
+            assert_eq!(codes.encode(n), octahedral::encode(n), "normal {n}");
+        }
+    }
 
     #[test]
     fn stored_vertices_keep_their_sizes() {

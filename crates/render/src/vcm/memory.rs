@@ -17,7 +17,7 @@ use spectrum::{Hero4, Rgb};
 
 use super::connect::Splat;
 use super::light_pass::trace_light_path;
-use super::light_vertex::{LightVertex, MergeRecord};
+use super::light_vertex::{LightVertex, MergeRecord, NormalCodes};
 use super::mis::MisConstants;
 use super::{Iteration, LIGHT_STREAM, Techniques, VcmSettings};
 
@@ -93,11 +93,12 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
     let mut vertices = Vec::new();
     let mut splats = Vec::new();
     let (mut stored, mut splatted) = (0usize, 0usize);
+    let mut codes = NormalCodes::default();
     for path in 0..pilot {
         let mut rng = Rng::for_stream(seed, 0, LIGHT_STREAM | path as u64);
         // The vertex count does not depend on the spectral mode (sampling decisions use RGB
         // values in both), so the pilot traces in RGB.
-        trace_light_path::<Rgb>(scene, &it, &mut rng, &mut vertices, &mut splats, &());
+        trace_light_path::<Rgb>(scene, &it, &mut rng, &mut vertices, &mut splats, &(), &mut codes);
         stored += vertices.len();
         splatted += splats.len();
         vertices.clear();

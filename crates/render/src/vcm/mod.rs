@@ -60,7 +60,7 @@ use crate::hash_grid::HashGrid;
 use camera_pass::trace_camera_path_recorded;
 use connect::Splat;
 use light_pass::trace_light_path;
-use light_vertex::{LightPath, LightVertex, LightVertexStore, MergeRecord};
+use light_vertex::{LightPath, LightVertex, LightVertexStore, MergeRecord, NormalCodes};
 use merge::{MergeGroup, MergeScope, MergeSource, MergeVertices};
 use mis::MisConstants;
 use splats::SplatSums;
@@ -715,12 +715,13 @@ impl<S: SpectralMode> Engine<S> {
             let mut families = Vec::new();
             let mut rejected = RejectedCounts::default();
             let mut stage = vec![Rgb::BLACK; images];
+            let mut codes = NormalCodes::default();
             for (column, pixel) in pixels.iter_mut().enumerate() {
                 let index = row * width + column;
                 vertices.clear();
                 let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
                 let wavelengths = sets.get(seed, iteration, index as u64);
-                trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &*wavelengths);
+                trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &*wavelengths, &mut codes);
                 let mut rng = crate::splat_frame::camera_stream(seed, iteration, index);
                 let light_path = LightPath::Contiguous(&vertices);
                 let techniques = layout.map(|layout| {
@@ -952,10 +953,11 @@ fn trace_light_chunks<S: SpectralMode>(
             let mut vertices = Vec::new();
             let mut ends = Vec::new();
             let mut splats = Vec::new();
+            let mut codes = NormalCodes::default();
             for path in first..(first + LIGHT_CHUNK).min(paths.end) {
                 let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
                 let wavelengths = sets.get(seed, iteration, path as u64);
-                trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats, &*wavelengths);
+                trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats, &*wavelengths, &mut codes);
                 ends.push(vertices.len() as u32);
             }
             (vertices, ends, splats)
