@@ -87,9 +87,9 @@ pub fn spread_lattice(camera: &Camera, offset: [f32; 2], values: &mut [Rgb], str
     // result below), which adds exactly zero where the pairwise sum skipped them.
     values.par_iter_mut().filter(|v| !v.is_finite()).for_each(|v| *v = Rgb::BLACK);
     // Along the rows: each pixel x gathers the samples sx = x + reach − k of its row for
-    // k = 0..=2·reach, in increasing k (tap k outer, so each pass is a contiguous multiply-add
-    // that vectorises, and every pixel still sums its taps in the pairwise order); taps outside
-    // the row are skipped.
+    // k = 0..=2·reach, in increasing k (tap k outer, so each pass is a multiply-add over a
+    // contiguous run without per-tap range checks, and every pixel still sums its taps in the
+    // pairwise order); taps outside the row are skipped.
     let mut along_rows = vec![Rgb::BLACK; values.len()];
     along_rows.par_chunks_mut(row_len).zip(values.par_chunks(row_len)).for_each(|(out, source)| {
         for (k, &w) in wx.iter().enumerate() {
