@@ -121,28 +121,38 @@ impl Bvh {
                 let node = &self.nodes[current.child as usize];
                 tally.node(WIDTH as u64);
                 let t = test.entries(node, t_best);
-                // The children the ray enters, farthest first (insertion sort by entry distance).
-                let mut hits = [Entry::default(); WIDTH];
-                let mut count = 0;
-                for (lane, &t_lane) in t.iter().enumerate() {
-                    if t_lane != f32::INFINITY {
-                        let entry = Entry { child: node.child[lane], meta: node.meta[lane], t: t_lane };
-                        let mut i = count;
-                        while i > 0 && hits[i - 1].t < entry.t {
-                            hits[i] = hits[i - 1];
-                            i -= 1;
+                let entered = entered_lanes(&t);
+                if entered & entered.wrapping_sub(1) == 0 {
+                    // At most one child entered (the common case): visit it now, or pop.
+                    if entered != 0 {
+                        let lane = entered.trailing_zeros() as usize % WIDTH;
+                        current = Entry { child: node.child[lane], meta: node.meta[lane], t: t[lane] };
+                        continue;
+                    }
+                } else {
+                    // The children the ray enters, farthest first (insertion sort by entry distance).
+                    let mut hits = [Entry::default(); WIDTH];
+                    let mut count = 0;
+                    for (lane, &t_lane) in t.iter().enumerate() {
+                        if t_lane != f32::INFINITY {
+                            let entry = Entry { child: node.child[lane], meta: node.meta[lane], t: t_lane };
+                            let mut i = count;
+                            while i > 0 && hits[i - 1].t < entry.t {
+                                hits[i] = hits[i - 1];
+                                i -= 1;
+                            }
+                            hits[i] = entry;
+                            count += 1;
                         }
-                        hits[i] = entry;
-                        count += 1;
                     }
-                }
-                if count > 0 {
-                    // Visit the nearest now, the others later (nearer ones popped first).
-                    for entry in &hits[..count - 1] {
-                        stack.push(*entry);
+                    if count > 0 {
+                        // Visit the nearest now, the others later (nearer ones popped first).
+                        for entry in &hits[..count - 1] {
+                            stack.push(*entry);
+                        }
+                        current = hits[count - 1];
+                        continue;
                     }
-                    current = hits[count - 1];
-                    continue;
                 }
             } else if current.meta & TRIANGLES != 0 {
                 let block = &self.blocks[current.child as usize];
