@@ -14,7 +14,8 @@ pub(super) const ROBUST_EXIT: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// Ray data precomputed for the slab test, each component splatted over the four lanes.
 pub(super) struct RayBox {
-    origin: [Vec4; 3],
+    /// The ray's origin, each component splatted.
+    pub(super) origin: [Vec4; 3],
     inverse_direction: [Vec4; 3],
     /// Per axis, the corner (0 = lower, 1 = upper) that holds the near plane: the lower one when
     /// the direction component's sign bit is clear.

@@ -86,15 +86,17 @@ fn entered_lanes(t: &[f32; WIDTH]) -> u32 {
 }
 
 impl Bvh {
-    /// The primitive ids of leaf `entry`. A single primitive's id is stored in the node itself,
-    /// which saves the load from the index array.
+    /// The primitive ids of a leaf entry (`child`, `meta`). A single primitive's id is stored in
+    /// the node itself, which saves the load from the index array.
+    /// `child` is a copy of the entry's `child` word: borrowing the entry itself would keep the
+    /// traversal's current entry in memory.
     #[inline(always)]
-    fn leaf_prims<'a>(&'a self, entry: &'a Entry) -> &'a [u32] {
-        if entry.meta == 1 {
-            std::slice::from_ref(&entry.child)
+    fn leaf_prims<'a>(&'a self, child: &'a u32, meta: u32) -> &'a [u32] {
+        if meta == 1 {
+            std::slice::from_ref(child)
         } else {
-            let first = entry.child as usize;
-            &self.prims[first..first + entry.meta as usize]
+            let first = *child as usize;
+            &self.prims[first..first + meta as usize]
         }
     }
 
@@ -111,7 +113,7 @@ impl Bvh {
             return None;
         }
         let test = RayBox::new(ray);
-        let lanes = RayLanes::new(ray);
+        let lanes = RayLanes::sharing_origin(&test, ray);
         let mut t_best = t_max;
         let mut best: Option<u32> = None;
         let mut stack: ArrayVec<Entry, STACK_SIZE> = ArrayVec::new();
@@ -166,7 +168,7 @@ impl Bvh {
                 while lanes_hit != 0 {
                     let lane = lanes_hit.trailing_zeros() as usize % WIDTH;
                     lanes_hit &= lanes_hit - 1;
-                    let (t, prim) = (distances[lane], block.ids[lane]);
+                    let (t, prim) = (distances.to_array()[lane], block.ids[lane]);
                     let limit = if best.is_some_and(|b| prim < b) { next_up(t_best) } else { t_best };
                     if t < limit {
                         t_best = t;
@@ -174,7 +176,8 @@ impl Bvh {
                     }
                 }
             } else {
-                for &prim in self.leaf_prims(&current) {
+                let child = current.child;
+                for &prim in self.leaf_prims(&child, current.meta) {
                     tally.primitive();
                     // The tie rule (module doc): smaller ids may also hit at exactly `t_best`.
                     let limit = if best.is_some_and(|b| prim < b) { next_up(t_best) } else { t_best };
@@ -210,7 +213,7 @@ impl Bvh {
             return false;
         }
         let test = RayBox::new(ray);
-        let lanes = RayLanes::new(ray);
+        let lanes = RayLanes::sharing_origin(&test, ray);
         let mut stack: ArrayVec<u32, STACK_SIZE> = ArrayVec::new();
         let mut node_index = 0u32;
         loop {
@@ -237,7 +240,8 @@ impl Bvh {
                     continue;
                 }
                 // Leaves are tested at once: any blocker ends the query.
-                for &prim in self.leaf_prims(&entry) {
+                let child = entry.child;
+                for &prim in self.leaf_prims(&child, entry.meta) {
                     tally.primitive();
                     if occluded(prim, ray, t_max) {
                         return true;
