@@ -124,15 +124,26 @@ impl Bvh {
                 tally.node(WIDTH as u64);
                 let t = test.entries(node, t_best);
                 let entered = entered_lanes(&t);
-                if entered & entered.wrapping_sub(1) == 0 {
-                    // At most one child entered (the common case): visit it now, or pop.
-                    if entered != 0 {
-                        let lane = entered.trailing_zeros() as usize % WIDTH;
-                        current = Entry { child: node.child[lane], meta: node.meta[lane], t: t[lane] };
-                        continue;
-                    }
+                let entry = |lane: usize| Entry { child: node.child[lane], meta: node.meta[lane], t: t[lane] };
+                let rest = entered & entered.wrapping_sub(1);
+                if entered == 0 {
+                    // Nothing entered: pop below.
+                } else if rest == 0 {
+                    // One child entered (the common case): visit it now.
+                    current = entry(entered.trailing_zeros() as usize % WIDTH);
+                    continue;
+                } else if rest & (rest - 1) == 0 {
+                    // Two: the nearer now, the farther later; of two at the same distance the
+                    // later lane comes first, as in the sort below.
+                    let a = entry(entered.trailing_zeros() as usize % WIDTH);
+                    let b = entry(rest.trailing_zeros() as usize % WIDTH);
+                    let (near, far) = if a.t < b.t { (a, b) } else { (b, a) };
+                    stack.push(far);
+                    current = near;
+                    continue;
                 } else {
-                    // The children the ray enters, farthest first (insertion sort by entry distance).
+                    // Three or four: farthest first (insertion sort by entry distance, lanes in
+                    // order), the nearest is visited now, the others later (nearer ones first).
                     let mut hits = [Entry::default(); WIDTH];
                     let mut count = 0;
                     for (lane, &t_lane) in t.iter().enumerate() {
@@ -148,7 +159,6 @@ impl Bvh {
                         }
                     }
                     if count > 0 {
-                        // Visit the nearest now, the others later (nearer ones popped first).
                         for entry in &hits[..count - 1] {
                             stack.push(*entry);
                         }
