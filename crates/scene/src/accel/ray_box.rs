@@ -49,8 +49,8 @@ impl RayBox {
         let mut t_exit = Vec4::splat(t_max);
         for axis in 0..3 {
             let near_corner = self.near[axis] & 1;
-            let near = Vec4::from_array(node.corners[near_corner][axis]);
-            let far = Vec4::from_array(node.corners[near_corner ^ 1][axis]);
+            let near = Vec4::from_array(node.slabs[axis][near_corner]);
+            let far = Vec4::from_array(node.slabs[axis][near_corner ^ 1]);
             let (origin, inverse) = (self.origin[axis], self.inverse_direction[axis]);
             let t_near = (near - origin) * inverse;
             let t_far = (far - origin) * inverse;
