@@ -373,7 +373,7 @@ impl Scene {
 
     /// Geometric normal, shading normal, texture coordinates and mesh attribute value of
     /// `primitive` at `position`, the normals in the primitive's own space (world or object).
-    #[inline]
+    #[inline(always)]
     fn local_surface(&self, primitive: &Primitive, position: Vec3) -> (Vec3, Vec3, Vec2, Rgb) {
         let mut normal = primitive.shape.normal_at(position);
         let mut shading_normal = normal;
