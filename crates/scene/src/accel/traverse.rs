@@ -115,6 +115,8 @@ impl Bvh {
         let test = RayBox::new(ray);
         let lanes = RayLanes::sharing_origin(&test, ray);
         let mut t_best = t_max;
+        // `next_up(t_best)`, the tie rule's limit for smaller ids, updated with `t_best`.
+        let mut t_tie = next_up(t_best);
         let mut best: Option<u32> = None;
         let mut stack: ArrayVec<Entry, STACK_SIZE> = ArrayVec::new();
         let mut current = Entry { child: 0, meta: INTERIOR, t: 0.0 };
@@ -174,14 +176,15 @@ impl Bvh {
                 }
                 // Only hits nearer than `next_up(t_best)` can pass the tie rule's limit below (a
                 // miss is `+∞`, which passes no limit); usually there are none.
-                let mut lanes_hit = distances.cmplt(Vec4::splat(next_up(t_best))).bitmask();
+                let mut lanes_hit = distances.cmplt(Vec4::splat(t_tie)).bitmask();
                 while lanes_hit != 0 {
                     let lane = lanes_hit.trailing_zeros() as usize % WIDTH;
                     lanes_hit &= lanes_hit - 1;
                     let (t, prim) = (distances.to_array()[lane], block.ids[lane]);
-                    let limit = if best.is_some_and(|b| prim < b) { next_up(t_best) } else { t_best };
+                    let limit = if best.is_some_and(|b| prim < b) { t_tie } else { t_best };
                     if t < limit {
                         t_best = t;
+                        t_tie = next_up(t);
                         best = Some(prim);
                     }
                 }
@@ -190,9 +193,10 @@ impl Bvh {
                 for &prim in self.leaf_prims(&child, current.meta) {
                     tally.primitive();
                     // The tie rule (module doc): smaller ids may also hit at exactly `t_best`.
-                    let limit = if best.is_some_and(|b| prim < b) { next_up(t_best) } else { t_best };
+                    let limit = if best.is_some_and(|b| prim < b) { t_tie } else { t_best };
                     if let Some(t) = intersect(prim, ray, limit).filter(|&t| t < limit) {
                         t_best = t;
+                        t_tie = next_up(t);
                         best = Some(prim);
                     }
                 }
