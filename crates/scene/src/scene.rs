@@ -322,10 +322,7 @@ impl Scene {
                 let primitive = &self.primitives[i as usize];
                 return primitive.shape.intersect(r, t_max).filter(|&t| self.alpha_keeps(primitive, r, t));
             }
-            let instance = &self.instances[(i - world_primitives) as usize];
-            let (primitive, t) =
-                self.objects[instance.object as usize]
-                    .closest_hit(&instance.to_object_ray(r), t_max, |p, r, t| self.alpha_keeps(p, r, t))?;
+            let (primitive, t) = self.instance_hit(i - world_primitives, r, t_max)?;
             object_primitive = primitive;
             Some(t)
         })?;
@@ -376,7 +373,7 @@ impl Scene {
 
     /// Geometric normal, shading normal, texture coordinates and mesh attribute value of
     /// `primitive` at `position`, the normals in the primitive's own space (world or object).
-    #[inline]
+    #[inline(always)]
     fn local_surface(&self, primitive: &Primitive, position: Vec3) -> (Vec3, Vec3, Vec2, Rgb) {
         let mut normal = primitive.shape.normal_at(position);
         let mut shading_normal = normal;
@@ -479,10 +476,28 @@ impl Scene {
                 let primitive = &self.primitives[i as usize];
                 return primitive.shape.intersect(r, t).is_some_and(|t| self.alpha_keeps(primitive, r, t));
             }
-            let instance = &self.instances[(i - world_primitives) as usize];
-            self.objects[instance.object as usize]
-                .any_hit(&instance.to_object_ray(r), t, |p, r, t| self.alpha_keeps(p, r, t))
+            self.instance_blocks(i - world_primitives, r, t)
         })
+    }
+
+    /// The nearest hit of instance `index` along the world-space `ray` before `t_max`: the
+    /// object primitive and the distance. Not inlined into [`Scene::intersect`]: its per-ray
+    /// setup (the object-space ray's splats) would be computed for every ray there, also in
+    /// scenes without instances.
+    #[inline(never)]
+    fn instance_hit(&self, index: u32, ray: &Ray, t_max: f32) -> Option<(u32, f32)> {
+        let instance = &self.instances[index as usize];
+        self.objects[instance.object as usize]
+            .closest_hit(&instance.to_object_ray(ray), t_max, |p, r, t| self.alpha_keeps(p, r, t))
+    }
+
+    /// Whether instance `index` blocks the world-space `ray` before `t_max` ([`Scene::occluded`];
+    /// not inlined, for the same reason as [`Scene::instance_hit`]).
+    #[inline(never)]
+    fn instance_blocks(&self, index: u32, ray: &Ray, t_max: f32) -> bool {
+        let instance = &self.instances[index as usize];
+        self.objects[instance.object as usize]
+            .any_hit(&instance.to_object_ray(ray), t_max, |p, r, t| self.alpha_keeps(p, r, t))
     }
 
     /// Picks a light with `u ∈ [0,1)` ([`light_selection_weights`]): its index, the light,

@@ -14,7 +14,8 @@ pub(super) const ROBUST_EXIT: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// Ray data precomputed for the slab test, each component splatted over the four lanes.
 pub(super) struct RayBox {
-    origin: [Vec4; 3],
+    /// The ray's origin, each component splatted.
+    pub(super) origin: [Vec4; 3],
     inverse_direction: [Vec4; 3],
     /// Per axis, the corner (0 = lower, 1 = upper) that holds the near plane: the lower one when
     /// the direction component's sign bit is clear.
@@ -48,8 +49,8 @@ impl RayBox {
         let mut t_exit = Vec4::splat(t_max);
         for axis in 0..3 {
             let near_corner = self.near[axis] & 1;
-            let near = Vec4::from_array(node.corners[near_corner][axis]);
-            let far = Vec4::from_array(node.corners[near_corner ^ 1][axis]);
+            let near = Vec4::from_array(node.slabs[axis][near_corner]);
+            let far = Vec4::from_array(node.slabs[axis][near_corner ^ 1]);
             let (origin, inverse) = (self.origin[axis], self.inverse_direction[axis]);
             let t_near = (near - origin) * inverse;
             let t_far = (far - origin) * inverse;

@@ -235,7 +235,7 @@ fn accel_large_soup_parallel_build() {
 /// Every word of a tree: the wide nodes and the primitive ids.
 fn tree_words(bvh: &Bvh) -> Vec<u32> {
     let node_words = bvh.nodes.iter().flat_map(|n| {
-        let corners = n.corners.iter().flatten().flatten().map(|x| x.to_bits());
+        let corners = n.slabs.iter().flatten().flatten().map(|x| x.to_bits());
         corners.chain(n.meta).chain(n.child).collect::<Vec<_>>()
     });
     node_words.chain(bvh.prims.iter().copied()).collect()
@@ -309,8 +309,8 @@ fn accel_collapse_structure() {
         for lane in 0..WIDTH {
             let (meta, child) = (node.meta[lane], node.child[lane]);
             let lane_box = Aabb::new(
-                Vec3::new(node.corners[0][0][lane], node.corners[0][1][lane], node.corners[0][2][lane]),
-                Vec3::new(node.corners[1][0][lane], node.corners[1][1][lane], node.corners[1][2][lane]),
+                Vec3::new(node.slabs[0][0][lane], node.slabs[1][0][lane], node.slabs[2][0][lane]),
+                Vec3::new(node.slabs[0][1][lane], node.slabs[1][1][lane], node.slabs[2][1][lane]),
             );
             if meta == 0 {
                 assert!(lane_box.min.x == f32::INFINITY && lane_box.max.x == f32::NEG_INFINITY, "unused lane box");

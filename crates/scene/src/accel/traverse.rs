@@ -86,15 +86,17 @@ fn entered_lanes(t: &[f32; WIDTH]) -> u32 {
 }
 
 impl Bvh {
-    /// The primitive ids of leaf `entry`. A single primitive's id is stored in the node itself,
-    /// which saves the load from the index array.
+    /// The primitive ids of a leaf entry (`child`, `meta`). A single primitive's id is stored in
+    /// the node itself, which saves the load from the index array.
+    /// `child` is a copy of the entry's `child` word: borrowing the entry itself would keep the
+    /// traversal's current entry in memory.
     #[inline(always)]
-    fn leaf_prims<'a>(&'a self, entry: &'a Entry) -> &'a [u32] {
-        if entry.meta == 1 {
-            std::slice::from_ref(&entry.child)
+    fn leaf_prims<'a>(&'a self, child: &'a u32, meta: u32) -> &'a [u32] {
+        if meta == 1 {
+            std::slice::from_ref(child)
         } else {
-            let first = entry.child as usize;
-            &self.prims[first..first + entry.meta as usize]
+            let first = *child as usize;
+            &self.prims[first..first + meta as usize]
         }
     }
 
@@ -111,8 +113,10 @@ impl Bvh {
             return None;
         }
         let test = RayBox::new(ray);
-        let lanes = RayLanes::new(ray);
+        let lanes = RayLanes::sharing_origin(&test, ray);
         let mut t_best = t_max;
+        // `next_up(t_best)`, the tie rule's limit for smaller ids, updated with `t_best`.
+        let mut t_tie = next_up(t_best);
         let mut best: Option<u32> = None;
         let mut stack: ArrayVec<Entry, STACK_SIZE> = ArrayVec::new();
         let mut current = Entry { child: 0, meta: INTERIOR, t: 0.0 };
@@ -121,28 +125,48 @@ impl Bvh {
                 let node = &self.nodes[current.child as usize];
                 tally.node(WIDTH as u64);
                 let t = test.entries(node, t_best);
-                // The children the ray enters, farthest first (insertion sort by entry distance).
-                let mut hits = [Entry::default(); WIDTH];
-                let mut count = 0;
-                for (lane, &t_lane) in t.iter().enumerate() {
-                    if t_lane != f32::INFINITY {
-                        let entry = Entry { child: node.child[lane], meta: node.meta[lane], t: t_lane };
-                        let mut i = count;
-                        while i > 0 && hits[i - 1].t < entry.t {
-                            hits[i] = hits[i - 1];
-                            i -= 1;
-                        }
-                        hits[i] = entry;
-                        count += 1;
-                    }
-                }
-                if count > 0 {
-                    // Visit the nearest now, the others later (nearer ones popped first).
-                    for entry in &hits[..count - 1] {
-                        stack.push(*entry);
-                    }
-                    current = hits[count - 1];
+                let entered = entered_lanes(&t);
+                let entry = |lane: usize| Entry { child: node.child[lane], meta: node.meta[lane], t: t[lane] };
+                let rest = entered & entered.wrapping_sub(1);
+                if entered == 0 {
+                    // Nothing entered: pop below.
+                } else if rest == 0 {
+                    // One child entered (the common case): visit it now.
+                    current = entry(entered.trailing_zeros() as usize % WIDTH);
                     continue;
+                } else if rest & (rest - 1) == 0 {
+                    // Two: the nearer now, the farther later; of two at the same distance the
+                    // later lane comes first, as in the sort below.
+                    let a = entry(entered.trailing_zeros() as usize % WIDTH);
+                    let b = entry(rest.trailing_zeros() as usize % WIDTH);
+                    let (near, far) = if a.t < b.t { (a, b) } else { (b, a) };
+                    stack.push(far);
+                    current = near;
+                    continue;
+                } else {
+                    // Three or four: farthest first (insertion sort by entry distance, lanes in
+                    // order), the nearest is visited now, the others later (nearer ones first).
+                    let mut hits = [Entry::default(); WIDTH];
+                    let mut count = 0;
+                    for (lane, &t_lane) in t.iter().enumerate() {
+                        if t_lane != f32::INFINITY {
+                            let entry = Entry { child: node.child[lane], meta: node.meta[lane], t: t_lane };
+                            let mut i = count;
+                            while i > 0 && hits[i - 1].t < entry.t {
+                                hits[i] = hits[i - 1];
+                                i -= 1;
+                            }
+                            hits[i] = entry;
+                            count += 1;
+                        }
+                    }
+                    if count > 0 {
+                        for entry in &hits[..count - 1] {
+                            stack.push(*entry);
+                        }
+                        current = hits[count - 1];
+                        continue;
+                    }
                 }
             } else if current.meta & TRIANGLES != 0 {
                 let block = &self.blocks[current.child as usize];
@@ -152,24 +176,27 @@ impl Bvh {
                 }
                 // Only hits nearer than `next_up(t_best)` can pass the tie rule's limit below (a
                 // miss is `+∞`, which passes no limit); usually there are none.
-                let mut lanes_hit = distances.cmplt(Vec4::splat(next_up(t_best))).bitmask();
+                let mut lanes_hit = distances.cmplt(Vec4::splat(t_tie)).bitmask();
                 while lanes_hit != 0 {
                     let lane = lanes_hit.trailing_zeros() as usize % WIDTH;
                     lanes_hit &= lanes_hit - 1;
-                    let (t, prim) = (distances[lane], block.ids[lane]);
-                    let limit = if best.is_some_and(|b| prim < b) { next_up(t_best) } else { t_best };
+                    let (t, prim) = (distances.to_array()[lane], block.ids[lane]);
+                    let limit = if best.is_some_and(|b| prim < b) { t_tie } else { t_best };
                     if t < limit {
                         t_best = t;
+                        t_tie = next_up(t);
                         best = Some(prim);
                     }
                 }
             } else {
-                for &prim in self.leaf_prims(&current) {
+                let child = current.child;
+                for &prim in self.leaf_prims(&child, current.meta) {
                     tally.primitive();
                     // The tie rule (module doc): smaller ids may also hit at exactly `t_best`.
-                    let limit = if best.is_some_and(|b| prim < b) { next_up(t_best) } else { t_best };
+                    let limit = if best.is_some_and(|b| prim < b) { t_tie } else { t_best };
                     if let Some(t) = intersect(prim, ray, limit).filter(|&t| t < limit) {
                         t_best = t;
+                        t_tie = next_up(t);
                         best = Some(prim);
                     }
                 }
@@ -200,7 +227,7 @@ impl Bvh {
             return false;
         }
         let test = RayBox::new(ray);
-        let lanes = RayLanes::new(ray);
+        let lanes = RayLanes::sharing_origin(&test, ray);
         let mut stack: ArrayVec<u32, STACK_SIZE> = ArrayVec::new();
         let mut node_index = 0u32;
         loop {
@@ -227,7 +254,8 @@ impl Bvh {
                     continue;
                 }
                 // Leaves are tested at once: any blocker ends the query.
-                for &prim in self.leaf_prims(&entry) {
+                let child = entry.child;
+                for &prim in self.leaf_prims(&child, entry.meta) {
                     tally.primitive();
                     if occluded(prim, ray, t_max) {
                         return true;

@@ -17,6 +17,7 @@
 use glam::Vec4;
 use math::Ray;
 
+use super::ray_box::RayBox;
 use super::wide::{WIDTH, WideNode};
 use crate::shape::Triangle;
 
@@ -47,13 +48,21 @@ pub(super) struct RayLanes {
 }
 
 impl RayLanes {
-    #[inline(always)]
+    #[cfg(test)]
     pub(super) fn new(ray: &Ray) -> Self {
         let (o, d) = (ray.origin, ray.direction);
         Self {
             origin: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
             direction: [Vec4::splat(d.x), Vec4::splat(d.y), Vec4::splat(d.z)],
         }
+    }
+
+    /// [`RayLanes::new`] with the origin lanes taken from the slab test's, which holds the same
+    /// values (the compiler does not see that and would splat and keep them twice).
+    #[inline(always)]
+    pub(super) fn sharing_origin(test: &RayBox, ray: &Ray) -> Self {
+        let d = ray.direction;
+        Self { origin: test.origin, direction: [Vec4::splat(d.x), Vec4::splat(d.y), Vec4::splat(d.z)] }
     }
 }
 

@@ -19,7 +19,9 @@ pub(super) const INTERIOR: u32 = u32::MAX;
 
 /// A node with up to [`WIDTH`] children; 128 bytes, two cache lines.
 ///
-/// * `corners[c][axis][lane]`: the child boxes, `c = 0` the lower corner, `c = 1` the upper one.
+/// * `slabs[axis][c][lane]`: the child boxes, `c = 0` the lower corner, `c = 1` the upper one
+///   (axis major, so that the slab test finds a ray's near and far plane of an axis at offsets
+///   that differ only by the ray's corner choice, computed once per ray).
 ///   An unused lane has the inverted box `(+∞, −∞)`, which no NaN-free ray enters.
 /// * `meta[lane]`: [`INTERIOR`], or the number of primitives of a leaf child (0 for an unused
 ///   lane, which is then a leaf without primitives: nothing to test even if a ray with NaNs
@@ -29,14 +31,14 @@ pub(super) const INTERIOR: u32 = u32::MAX;
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub(super) struct WideNode {
-    pub(super) corners: [[[f32; WIDTH]; 3]; 2],
+    pub(super) slabs: [[[f32; WIDTH]; 2]; 3],
     pub(super) meta: [u32; WIDTH],
     pub(super) child: [u32; WIDTH],
 }
 
 impl WideNode {
     const EMPTY: WideNode = WideNode {
-        corners: [[[f32::INFINITY; WIDTH]; 3], [[f32::NEG_INFINITY; WIDTH]; 3]],
+        slabs: [[[f32::INFINITY; WIDTH], [f32::NEG_INFINITY; WIDTH]]; 3],
         meta: [0; WIDTH],
         child: [0; WIDTH],
     };
@@ -44,8 +46,8 @@ impl WideNode {
     fn set_box(&mut self, lane: usize, node: &Node) {
         let (min, max) = (node.min(), node.max());
         for axis in 0..3 {
-            self.corners[0][axis][lane] = min[axis];
-            self.corners[1][axis][lane] = max[axis];
+            self.slabs[axis][0][lane] = min[axis];
+            self.slabs[axis][1][lane] = max[axis];
         }
     }
 }
