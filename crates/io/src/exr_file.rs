@@ -1,14 +1,15 @@
 //! OpenEXR reading and writing through the `exr` crate.
 //!
-//! Files are written as a single layer of 32-bit float `R`, `G`, `B`
-//! channels, RLE-compressed scanlines (lossless, so values round-trip bit
-//! for bit). ZIP, the other common choice, saves little on rendered floats, whose low mantissa
-//! bits are noise, at a large cost in time: on a 512² render of scene 1 (`pt`, 1 iteration) the
-//! file was 2.60 MB with ZIP, 2.88 MB with RLE and 3.15 MB uncompressed, and writing it with ZIP
-//! took 606 M more instructions than with RLE (callgrind, whole process); on a 64-iteration
-//! `vcm` render at 256², 733, 755 and 791 kB (measured 2026-11-28). Reading accepts any sample type (f16, f32, u32), takes the first
-//! layer that has `R`, `G` and `B` channels at its largest resolution level,
-//! and ignores alpha.
+//! Files are written as a single layer of 32-bit float `R`, `G`, `B` channels, RLE-compressed
+//! scanlines (lossless, so values round-trip bit for bit). ZIP, the other common choice, saves
+//! little on rendered floats, whose low mantissa bits are noise, at a large cost in time: on a
+//! 512² render of scene 1 (`pt`, 1 iteration) the file was 2.60 MB with ZIP, 2.88 MB with RLE
+//! and 3.15 MB uncompressed, and writing it with ZIP took 606 M more instructions than with RLE
+//! (callgrind, whole process); on a 64-iteration `vcm` render at 256², 733, 755 and 791 kB
+//! (measured 2026-11-28).
+//!
+//! Reading accepts any sample type (f16, f32, u32), takes the first layer that has `R`, `G` and
+//! `B` channels at its largest resolution level, and ignores alpha.
 
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Seek, SeekFrom, Write};

@@ -148,25 +148,23 @@ impl Bvh {
                     // order), the nearest is visited now, the others later (nearer ones first).
                     let mut hits = [Entry::default(); WIDTH];
                     let mut count = 0;
-                    for (lane, &t_lane) in t.iter().enumerate() {
-                        if t_lane != f32::INFINITY {
-                            let entry = Entry { child: node.child[lane], meta: node.meta[lane], t: t_lane };
-                            let mut i = count;
-                            while i > 0 && hits[i - 1].t < entry.t {
-                                hits[i] = hits[i - 1];
-                                i -= 1;
-                            }
-                            hits[i] = entry;
-                            count += 1;
+                    let mut lanes = entered;
+                    while lanes != 0 {
+                        let entry = entry(lanes.trailing_zeros() as usize % WIDTH);
+                        lanes &= lanes - 1;
+                        let mut i = count;
+                        while i > 0 && hits[i - 1].t < entry.t {
+                            hits[i] = hits[i - 1];
+                            i -= 1;
                         }
+                        hits[i] = entry;
+                        count += 1;
                     }
-                    if count > 0 {
-                        for entry in &hits[..count - 1] {
-                            stack.push(*entry);
-                        }
-                        current = hits[count - 1];
-                        continue;
+                    for entry in &hits[..count - 1] {
+                        stack.push(*entry);
                     }
+                    current = hits[count - 1];
+                    continue;
                 }
             } else if current.meta & TRIANGLES != 0 {
                 let block = &self.blocks[current.child as usize];
