@@ -23,6 +23,30 @@ def test_bad_settings_raise_value_error():
         vcm.Session(scene, resolution=(8, 8)).techniques()
 
 
+def test_keyword_errors_are_type_errors_naming_the_keyword():
+    scene = vcm.load_file("cornell-sun")
+    with pytest.raises(TypeError, match=r"render\(\) got an unexpected keyword argument 'iteration'; it accepts: "
+                                        r"algorithm, iterations, time,"):
+        vcm.render(scene, iteration=2)
+    # Each function accepts only its own: no budget for a Session, no technique images for render.
+    with pytest.raises(TypeError, match=r"Session\(\) got an unexpected keyword argument 'iterations'"):
+        vcm.Session(scene, iterations=2)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'techniques'"):
+        vcm.render(scene, techniques=True)
+    with pytest.raises(TypeError, match=r"render\(\): seed expects an int >= 0, got 'one'"):
+        vcm.render(scene, seed="one")
+    with pytest.raises(TypeError, match=r"Session\(\): volume_radius_factor expects a float or None"):
+        vcm.Session(scene, volume_radius_factor="big")
+    with pytest.raises(TypeError):
+        vcm.render(scene, "pt")  # keyword-only, as documented
+    # The volume radius is checked as the command line checks it.
+    with pytest.raises(ValueError, match="volume"):
+        vcm.render(vcm.load_file("cornell-fog"), iterations=1, resolution=(8, 8), volume_radius_factor=-1.0)
+    # A constructor error is an exception, not an abort (the 21-parameter constructor aborted).
+    with pytest.raises(ValueError, match="volume"):
+        vcm.Session(vcm.load_file("cornell-fog"), resolution=(8, 8), volume_radius_factor=-1.0)
+
+
 def test_unknown_scenes():
     with pytest.raises(ValueError, match="unknown scene 'cornell-nothing'"):
         vcm.load_file("cornell-nothing")

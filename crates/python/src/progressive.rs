@@ -14,7 +14,7 @@ use session::{Live, Notice, Observer, Prepared, Request, SceneSource};
 use crate::images::pixels_to_array;
 use crate::interrupt::run_interruptible;
 use crate::loading::Scene;
-use crate::options::Options;
+use crate::options::{Caller, Options};
 use crate::value_error;
 
 /// Collects a session's warnings and notes, issued as Python warnings afterwards.
@@ -40,57 +40,21 @@ impl Notices {
 }
 
 /// Renders `scene` and returns the image: numpy float32 `(height, width, 3)`, linear sRGB, top
-/// row first; the same image as `vcm render` writes for the same settings. `iterations`
-/// (default: the scene file's sample count, else 64) or `time` (seconds) is the budget;
-/// `threads=None` uses all cores. Ctrl-C stops after the current iteration and raises
-/// `KeyboardInterrupt`.
+/// row first; the same image as `vcm render` writes for the same settings. Keyword arguments
+/// (all optional, see `python/vcm/__init__.pyi`): `algorithm`, `iterations` (default: the scene
+/// file's sample count, else 64) or `time` (seconds), `resolution`, `seed`, `threads` (`None`:
+/// all cores), `max_length`, `spectral`, `radius_factor`, `radius_alpha`,
+/// `volume_radius_factor`, `radius_mode`, `memory_efficient`, `rr_depth`, `heuristic`,
+/// `light_sampler`, `max_memory`, `permissive`. Ctrl-C stops after the current iteration and
+/// raises `KeyboardInterrupt`.
 #[pyfunction]
-#[pyo3(signature = (scene, algorithm = "vcm".to_string(), iterations = None, time = None, resolution = None,
-    seed = 0, threads = None, max_length = None, spectral = false, radius_factor = None, radius_alpha = None,
-    radius_mode = "global".to_string(), memory_efficient = false, rr_depth = None,
-    heuristic = "balance".to_string(), light_sampler = "tree".to_string(), max_memory = None,
-    permissive = false))]
-#[allow(clippy::too_many_arguments)]
-pub fn render<'py>(
-    py: Python<'py>,
-    scene: &Scene,
-    algorithm: String,
-    iterations: Option<u64>,
-    time: Option<f64>,
-    resolution: Option<(u32, u32)>,
-    seed: u64,
-    threads: Option<usize>,
-    max_length: Option<u32>,
-    spectral: bool,
-    radius_factor: Option<f32>,
-    radius_alpha: Option<f32>,
-    radius_mode: String,
-    memory_efficient: bool,
-    rr_depth: Option<String>,
-    heuristic: String,
-    light_sampler: String,
-    max_memory: Option<u64>,
-    permissive: bool,
-) -> PyResult<Bound<'py, PyAny>> {
-    let options = Options {
-        algorithm,
-        iterations,
-        time,
-        resolution,
-        seed,
-        threads,
-        max_length,
-        spectral,
-        radius_factor,
-        radius_alpha,
-        radius_mode,
-        memory_efficient,
-        rr_depth,
-        heuristic,
-        light_sampler,
-        max_memory,
-        permissive,
-    };
+#[pyo3(signature = (scene, **kwargs))]
+#[pyo3(text_signature = "(scene, *, algorithm='vcm', iterations=None, time=None, resolution=None, seed=0, \
+    threads=None, max_length=None, spectral=False, radius_factor=None, radius_alpha=None, \
+    volume_radius_factor=None, radius_mode='global', memory_efficient=False, rr_depth=None, \
+    heuristic='balance', light_sampler='tree', max_memory=None, permissive=False)")]
+pub fn render<'py>(py: Python<'py>, scene: &Scene, kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Bound<'py, PyAny>> {
+    let options = Options::parse(Caller::Render, kwargs)?;
     let request = options.request(scene.source.clone()).map_err(value_error)?;
     let mut notices = Notices::default();
     let outcome = run_interruptible(py, |stop| session::render(&request, Some(stop), &mut notices))?;
@@ -133,57 +97,17 @@ impl Session {
 #[pymethods]
 impl Session {
     #[new]
-    #[pyo3(signature = (scene, algorithm = "vcm".to_string(), resolution = None, seed = 0, threads = None,
-        max_length = None, spectral = false, radius_factor = None, radius_alpha = None,
-        radius_mode = "global".to_string(), memory_efficient = false, rr_depth = None,
-        heuristic = "balance".to_string(), light_sampler = "tree".to_string(), max_memory = None,
-        permissive = false, techniques = false,
-        technique_length = 4))]
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        py: Python<'_>,
-        scene: &Scene,
-        algorithm: String,
-        resolution: Option<(u32, u32)>,
-        seed: u64,
-        threads: Option<usize>,
-        max_length: Option<u32>,
-        spectral: bool,
-        radius_factor: Option<f32>,
-        radius_alpha: Option<f32>,
-        radius_mode: String,
-        memory_efficient: bool,
-        rr_depth: Option<String>,
-        heuristic: String,
-        light_sampler: String,
-        max_memory: Option<u64>,
-        permissive: bool,
-        techniques: bool,
-        technique_length: u32,
-    ) -> PyResult<Self> {
-        let options = Options {
-            algorithm,
-            iterations: None,
-            time: None,
-            resolution,
-            seed,
-            threads,
-            max_length,
-            spectral,
-            radius_factor,
-            radius_alpha,
-            radius_mode,
-            memory_efficient,
-            rr_depth,
-            heuristic,
-            light_sampler,
-            max_memory,
-            permissive,
-        };
+    #[pyo3(signature = (scene, **kwargs))]
+    #[pyo3(text_signature = "(scene, *, algorithm='vcm', resolution=None, seed=0, threads=None, \
+        max_length=None, spectral=False, radius_factor=None, radius_alpha=None, volume_radius_factor=None, \
+        radius_mode='global', memory_efficient=False, rr_depth=None, heuristic='balance', \
+        light_sampler='tree', max_memory=None, permissive=False, techniques=False, technique_length=4)")]
+    fn new(py: Python<'_>, scene: &Scene, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let options = Options::parse(Caller::Session, kwargs)?;
         let request = options.request(scene.source.clone()).map_err(value_error)?;
-        let layout = match techniques {
+        let layout = match options.techniques {
             true => Some(
-                TechniqueLayout::new(technique_length)
+                TechniqueLayout::new(options.technique_length)
                     .map_err(|e| PyValueError::new_err(format!("technique_length: {e}")))?,
             ),
             false => None,
