@@ -24,6 +24,7 @@ mod exr_file;
 mod gz;
 mod linear_image;
 mod loop_subdivision;
+pub mod nanovdb;
 mod options;
 mod pfm;
 mod sdfgrid;

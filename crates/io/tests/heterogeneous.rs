@@ -211,7 +211,7 @@ fn pbrt_grid_errors_name_file_and_line() {
         (r#"MakeNamedMedium "m" "string type" "uniformgrid" "float density" [-1]"#, "non-negative"),
         (r#"MakeNamedMedium "m" "string type" "uniformgrid" "float density" [1] "point3 p1" [0 1 1]"#, "empty"),
         (r#"MakeNamedMedium "m" "string type" "rgbgrid" "integer nx" 2 "rgb sigma_s" [1 1 1]"#, "rgb values"),
-        (r#"MakeNamedMedium "m" "string type" "nanovdb""#, "nanovdb"),
+        (r#"MakeNamedMedium "m" "string type" "nanovdb""#, "needs a \"string filename\""),
     ];
     for (index, (line, needle)) in cases.iter().enumerate() {
         let error = pbrt(&format!("pbrt_err{index}"), &format!("WorldBegin\n{line}\n"))

@@ -151,7 +151,6 @@ fn pbrt_media_interfaces_camera_and_interface_material() {
 fn pbrt_unsupported_media_are_errors() {
     let cases = [
         (r#"MakeNamedMedium "m" "string type" "cloud""#, "cloud"),
-        (r#"MakeNamedMedium "m" "string type" "nanovdb""#, "nanovdb"),
         (r#"MakeNamedMedium "m" "string type" "homogeneous" "string preset" "Skin1""#, "preset"),
         (r#"MakeNamedMedium "m" "string type" "homogeneous" "rgb Le" [1 1 1]"#, "Le"),
         (r#"MediumInterface "nowhere""#, "unknown medium"),

@@ -147,7 +147,7 @@ pub(super) fn rgb_grid(file: &Path, d: &Directive, ctm: &Mat4) -> Result<Coeffic
 
 /// The affine part of `m` in single precision; `None` when it is singular, projective or not
 /// finite.
-fn affine(m: &Mat4) -> Option<Affine3A> {
+pub(super) fn affine(m: &Mat4) -> Option<Affine3A> {
     let column = |c: usize| Vec3::new(m.m[0][c] as f32, m.m[1][c] as f32, m.m[2][c] as f32);
     let affine = Affine3A::from_cols(column(0).into(), column(1).into(), column(2).into(), column(3).into());
     let determinant = affine.matrix3.determinant();

@@ -3,9 +3,10 @@
 //! Henyey–Greenstein, default 0), `MediumInterface "inside" "outside"` (one name: both sides;
 //! `""` is vacuum), the camera's medium (the current outside medium at `Camera`) and the
 //! `interface` material of index-matched boundaries. A shape gets the current interface when
-//! its two sides differ (pbrt-v4's `IsMediumTransition`). Named presets, emissive media (`Le`)
-//! and the media `nanovdb`, `cloud` are errors naming the file,
-//! line and feature (issue #15).
+//! its two sides differ (pbrt-v4's `IsMediumTransition`). Grid media: `uniformgrid`, `rgbgrid`
+//! (`grid_medium.rs`) and `nanovdb` (`nanovdb_medium.rs`). Named presets, emissive media
+//! (`Le`, temperature grids) and the medium `cloud` are errors naming the file, line and
+//! feature (issue #15).
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -75,12 +76,12 @@ impl Builder {
         let Some((ty, pos)) = p.string("type")? else {
             return Err(err(file, d.pos, format!("MakeNamedMedium \"{name}\" needs a \"string type\"")));
         };
-        if !matches!(ty.as_str(), "homogeneous" | "uniformgrid" | "rgbgrid") {
+        if !matches!(ty.as_str(), "homogeneous" | "uniformgrid" | "rgbgrid" | "nanovdb") {
             return Err(err(
                 file,
                 pos,
                 format!(
-                    "medium type \"{ty}\" is not supported (only \"homogeneous\", \"uniformgrid\" and \"rgbgrid\"; issue #15)"
+                    "medium type \"{ty}\" is not supported (only \"homogeneous\", \"uniformgrid\", \"rgbgrid\" and \"nanovdb\"; issue #15)"
                 ),
             ));
         }
@@ -91,7 +92,9 @@ impl Builder {
                 format!("named medium presets (\"{preset}\") are not supported; give sigma_a and sigma_s"),
             ));
         }
-        if let Some(le) = p.find("Le") {
+        // pbrt-v4's nanovdb medium has no "Le" (its emission comes from a temperature grid,
+        // checked in nanovdb_medium.rs); an "Le" there is an unused parameter.
+        if let Some(le) = (ty != "nanovdb").then(|| p.find("Le")).flatten() {
             let emits = le.values.iter().any(|v| matches!(v, Value::Num(x) if *x != 0.0));
             let scale = p.float("Lescale", 1.0)?;
             if emits && scale != 0.0 {
@@ -109,6 +112,8 @@ impl Builder {
             let sigma_s = coefficient(p, "sigma_s")?;
             if ty == "uniformgrid" {
                 super::grid_medium::uniform_grid(file, d, &ctm, &sigma_a, &sigma_s)?
+            } else if ty == "nanovdb" {
+                super::nanovdb_medium::nanovdb_grid(file, d, &ctm, &sigma_a, &sigma_s)?
             } else {
                 Coefficients::AbsorptionScattering { sigma_a, sigma_s }
             }

@@ -62,6 +62,7 @@ mod goniometric;
 mod grid_medium;
 mod instancing;
 mod medium;
+mod nanovdb_medium;
 mod parser;
 pub mod tokenizer;
 mod transform;
