@@ -15,7 +15,7 @@ use arrayvec::ArrayVec;
 use glam::Vec4;
 use math::Ray;
 
-use super::ray_box::{ROBUST_EXIT, RayBox};
+use super::ray_box::{ROBUST_EXIT, RayBox, octant};
 use super::triangle_block::{RayLanes, TRIANGLES};
 use super::wide::{INTERIOR, WIDTH};
 use super::{Bvh, MAX_DEPTH, TraversalCounts};
@@ -106,12 +106,34 @@ impl Bvh {
         &self,
         ray: &Ray,
         t_max: f32,
-        mut intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
+        intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
         tally: &mut T,
     ) -> Option<(u32, f32)> {
         if self.nodes.is_empty() || t_max.is_nan() || t_max <= 0.0 {
             return None;
         }
+        match octant(ray) {
+            0 => self.closest_hit_in::<0, T>(ray, t_max, intersect, tally),
+            1 => self.closest_hit_in::<1, T>(ray, t_max, intersect, tally),
+            2 => self.closest_hit_in::<2, T>(ray, t_max, intersect, tally),
+            3 => self.closest_hit_in::<3, T>(ray, t_max, intersect, tally),
+            4 => self.closest_hit_in::<4, T>(ray, t_max, intersect, tally),
+            5 => self.closest_hit_in::<5, T>(ray, t_max, intersect, tally),
+            6 => self.closest_hit_in::<6, T>(ray, t_max, intersect, tally),
+            _ => self.closest_hit_in::<7, T>(ray, t_max, intersect, tally),
+        }
+    }
+
+    /// [`Bvh::closest_hit`] for a tree with nodes, `t_max > 0`, and a ray in octant `OCTANT`
+    /// ([`octant`]).
+    #[inline(always)]
+    fn closest_hit_in<const OCTANT: usize, T: Tally>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
+        tally: &mut T,
+    ) -> Option<(u32, f32)> {
         let test = RayBox::new(ray);
         let lanes = RayLanes::sharing_origin(&test, ray);
         let mut t_best = t_max;
@@ -124,7 +146,7 @@ impl Bvh {
             if current.meta == INTERIOR {
                 let node = &self.nodes[current.child as usize];
                 tally.node(WIDTH as u64);
-                let t = test.entries(node, t_best);
+                let t = test.entries::<OCTANT>(node, t_best);
                 let entered = entered_lanes(&t);
                 let entry = |lane: usize| Entry { child: node.child[lane], meta: node.meta[lane], t: t[lane] };
                 let rest = entered & entered.wrapping_sub(1);
@@ -218,12 +240,34 @@ impl Bvh {
         &self,
         ray: &Ray,
         t_max: f32,
-        mut occluded: impl FnMut(u32, &Ray, f32) -> bool,
+        occluded: impl FnMut(u32, &Ray, f32) -> bool,
         tally: &mut T,
     ) -> bool {
         if self.nodes.is_empty() || t_max.is_nan() || t_max <= 0.0 {
             return false;
         }
+        match octant(ray) {
+            0 => self.any_hit_in::<0, T>(ray, t_max, occluded, tally),
+            1 => self.any_hit_in::<1, T>(ray, t_max, occluded, tally),
+            2 => self.any_hit_in::<2, T>(ray, t_max, occluded, tally),
+            3 => self.any_hit_in::<3, T>(ray, t_max, occluded, tally),
+            4 => self.any_hit_in::<4, T>(ray, t_max, occluded, tally),
+            5 => self.any_hit_in::<5, T>(ray, t_max, occluded, tally),
+            6 => self.any_hit_in::<6, T>(ray, t_max, occluded, tally),
+            _ => self.any_hit_in::<7, T>(ray, t_max, occluded, tally),
+        }
+    }
+
+    /// [`Bvh::any_hit`] for a tree with nodes, `t_max > 0`, and a ray in octant `OCTANT`
+    /// ([`octant`]).
+    #[inline(always)]
+    fn any_hit_in<const OCTANT: usize, T: Tally>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut occluded: impl FnMut(u32, &Ray, f32) -> bool,
+        tally: &mut T,
+    ) -> bool {
         let test = RayBox::new(ray);
         let lanes = RayLanes::sharing_origin(&test, ray);
         let mut stack: ArrayVec<u32, STACK_SIZE> = ArrayVec::new();
@@ -231,7 +275,7 @@ impl Bvh {
         loop {
             let node = &self.nodes[node_index as usize];
             tally.node(WIDTH as u64);
-            let t = test.entries(node, t_max);
+            let t = test.entries::<OCTANT>(node, t_max);
             let mut entered = entered_lanes(&t);
             while entered != 0 {
                 let lane = entered.trailing_zeros() as usize % WIDTH;
