@@ -17,9 +17,18 @@ pub(super) struct RayBox {
     /// The ray's origin, each component splatted.
     pub(super) origin: [Vec4; 3],
     inverse_direction: [Vec4; 3],
-    /// Per axis, the corner (0 = lower, 1 = upper) that holds the near plane: the lower one when
-    /// the direction component's sign bit is clear.
-    near: [usize; 3],
+}
+
+/// The octant of `ray`'s direction: bit `axis` is set when that component's sign bit is set,
+/// i.e. when the near plane of that axis is a box's upper corner (the lower one otherwise).
+///
+/// The queries are compiled once per octant ([`RayBox::entries`] takes it as a constant), so
+/// that the slab test reads its planes at fixed offsets: with the octant a per-ray variable, the
+/// six plane offsets did not fit in registers and were reloaded and scaled at every node.
+#[inline(always)]
+pub(super) fn octant(ray: &Ray) -> usize {
+    let d = ray.direction;
+    d.x.is_sign_negative() as usize | (d.y.is_sign_negative() as usize) << 1 | (d.z.is_sign_negative() as usize) << 2
 }
 
 impl RayBox {
@@ -28,27 +37,25 @@ impl RayBox {
         let d = ray.direction;
         // Zero components give ±∞ (by the sign of the zero), which the slab test handles.
         let inverse = [1.0 / d.x, 1.0 / d.y, 1.0 / d.z];
-        let near = [d.x.is_sign_negative() as usize, d.y.is_sign_negative() as usize, d.z.is_sign_negative() as usize];
         let o = ray.origin;
         Self {
             origin: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
             inverse_direction: inverse.map(Vec4::splat),
-            near,
         }
     }
 
     /// Per lane, the distance at which the ray enters the child box within `(0, t_max]`, or
-    /// `+∞` when it misses the box.
+    /// `+∞` when it misses the box. `OCTANT` must be the ray's [`octant`].
     ///
     /// A zero direction component makes the plane distance `±∞`, or NaN (`0·∞`) when the origin
     /// lies on the plane; the comparisons below are written so that a NaN never wins, i.e. the
     /// ray counts as inside that slab, which is the correct answer for an origin on the plane.
     #[inline(always)]
-    pub(super) fn entries(&self, node: &WideNode, t_max: f32) -> [f32; WIDTH] {
+    pub(super) fn entries<const OCTANT: usize>(&self, node: &WideNode, t_max: f32) -> [f32; WIDTH] {
         let mut t_enter = Vec4::ZERO;
         let mut t_exit = Vec4::splat(t_max);
         for axis in 0..3 {
-            let near_corner = self.near[axis] & 1;
+            let near_corner = (OCTANT >> axis) & 1;
             let near = Vec4::from_array(node.slabs[axis][near_corner]);
             let far = Vec4::from_array(node.slabs[axis][near_corner ^ 1]);
             let (origin, inverse) = (self.origin[axis], self.inverse_direction[axis]);

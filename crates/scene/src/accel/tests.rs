@@ -291,8 +291,8 @@ fn accel_parallel_build_is_identical_with_one_and_two_threads() {
 }
 
 /// The collapse keeps every leaf of the binary tree exactly once, each child box is the box of
-/// its binary node (so it contains its primitives), interior children are filled up to four
-/// wherever the binary tree allows, and the wide tree needs fewer, shallower nodes.
+/// its binary node (so it contains its primitives), every wide node has at least two children,
+/// and the wide tree needs fewer, shallower nodes.
 #[test]
 fn accel_collapse_structure() {
     let mut rng = Rng::for_stream(8, 0, 0);
@@ -305,7 +305,6 @@ fn accel_collapse_structure() {
     let mut lanes_used = 0;
     for node in &bvh.nodes {
         let mut used_here = 0;
-        let mut interior_here = 0;
         for lane in 0..WIDTH {
             let (meta, child) = (node.meta[lane], node.child[lane]);
             let lane_box = Aabb::new(
@@ -319,7 +318,6 @@ fn accel_collapse_structure() {
             used_here += 1;
             if meta == INTERIOR {
                 assert!((child as usize) < bvh.nodes.len());
-                interior_here += 1;
                 continue;
             }
             leaves += 1;
@@ -335,7 +333,6 @@ fn accel_collapse_structure() {
             }
         }
         assert!(used_here >= 2 || bvh.nodes.len() == 1, "a wide node with one child");
-        assert!(used_here == WIDTH || interior_here == 0, "a node with free lanes left an interior child closed");
         lanes_used += used_here;
     }
     assert!(seen.iter().all(|&s| s == 1), "every primitive in exactly one leaf");

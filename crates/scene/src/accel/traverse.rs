@@ -15,7 +15,7 @@ use arrayvec::ArrayVec;
 use glam::Vec4;
 use math::Ray;
 
-use super::ray_box::{ROBUST_EXIT, RayBox};
+use super::ray_box::{ROBUST_EXIT, RayBox, octant};
 use super::triangle_block::{RayLanes, TRIANGLES};
 use super::wide::{INTERIOR, WIDTH};
 use super::{Bvh, MAX_DEPTH, TraversalCounts};
@@ -78,6 +78,33 @@ fn next_up(x: f32) -> f32 {
     if x.is_finite() { f32::from_bits(x.to_bits() + 1) } else { x }
 }
 
+/// `best` of the nearest-hit query before anything was hit; larger than every primitive id
+/// (ids index a slice of primitive boxes, so they stay below `u32::MAX`).
+const NO_HIT: u32 = u32::MAX;
+
+/// The lanes `0..WIDTH` sorted by their entry distance `t[lane]`, farthest first (lanes not
+/// entered, at `+∞`, first), as keys whose low two bits are the lane.
+///
+/// Entry distances are `+0`, positive, or `+∞` (never negative or NaN, see
+/// [`RayBox::entries`]), so their bit patterns order like the distances, and a key
+/// `bits << 32 | lane` orders by distance, then lane. Sorted by a network of five
+/// compare-exchanges, which compile to conditional moves.
+#[inline(always)]
+fn sort_lanes(t: &[f32; WIDTH]) -> [u64; WIDTH] {
+    let mut k: [u64; WIDTH] = std::array::from_fn(|lane| u64::from(t[lane].to_bits()) << 32 | lane as u64);
+    let mut exchange = |i: usize, j: usize| {
+        let (a, b) = (k[i], k[j]);
+        k[i] = a.max(b);
+        k[j] = a.min(b);
+    };
+    exchange(0, 1);
+    exchange(2, 3);
+    exchange(0, 2);
+    exchange(1, 3);
+    exchange(1, 2);
+    k
+}
+
 /// The lanes of [`RayBox::entries`]' result whose box the ray enters (those not `+∞`), as a bit
 /// mask (bit `lane`).
 #[inline(always)]
@@ -106,25 +133,49 @@ impl Bvh {
         &self,
         ray: &Ray,
         t_max: f32,
-        mut intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
+        intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
         tally: &mut T,
     ) -> Option<(u32, f32)> {
         if self.nodes.is_empty() || t_max.is_nan() || t_max <= 0.0 {
             return None;
         }
+        match octant(ray) {
+            0 => self.closest_hit_in::<0, T>(ray, t_max, intersect, tally),
+            1 => self.closest_hit_in::<1, T>(ray, t_max, intersect, tally),
+            2 => self.closest_hit_in::<2, T>(ray, t_max, intersect, tally),
+            3 => self.closest_hit_in::<3, T>(ray, t_max, intersect, tally),
+            4 => self.closest_hit_in::<4, T>(ray, t_max, intersect, tally),
+            5 => self.closest_hit_in::<5, T>(ray, t_max, intersect, tally),
+            6 => self.closest_hit_in::<6, T>(ray, t_max, intersect, tally),
+            _ => self.closest_hit_in::<7, T>(ray, t_max, intersect, tally),
+        }
+    }
+
+    /// [`Bvh::closest_hit`] for a tree with nodes, `t_max > 0`, and a ray in octant `OCTANT`
+    /// ([`octant`]).
+    #[inline(always)]
+    fn closest_hit_in<const OCTANT: usize, T: Tally>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
+        tally: &mut T,
+    ) -> Option<(u32, f32)> {
         let test = RayBox::new(ray);
         let lanes = RayLanes::sharing_origin(&test, ray);
         let mut t_best = t_max;
-        // `next_up(t_best)`, the tie rule's limit for smaller ids, updated with `t_best`.
-        let mut t_tie = next_up(t_best);
-        let mut best: Option<u32> = None;
+        // The tie rule's limit for ids smaller than `best`: `next_up(t_best)` once something was
+        // hit; before, `t_max` itself, since a hit must be nearer than `t_max` (every id is
+        // smaller than the sentinel `NO_HIT`).
+        let mut t_tie = t_max;
+        let mut best = NO_HIT;
         let mut stack: ArrayVec<Entry, STACK_SIZE> = ArrayVec::new();
         let mut current = Entry { child: 0, meta: INTERIOR, t: 0.0 };
         loop {
             if current.meta == INTERIOR {
                 let node = &self.nodes[current.child as usize];
                 tally.node(WIDTH as u64);
-                let t = test.entries(node, t_best);
+                let t = test.entries::<OCTANT>(node, t_best);
                 let entered = entered_lanes(&t);
                 let entry = |lane: usize| Entry { child: node.child[lane], meta: node.meta[lane], t: t[lane] };
                 let rest = entered & entered.wrapping_sub(1);
@@ -144,26 +195,15 @@ impl Bvh {
                     current = near;
                     continue;
                 } else {
-                    // Three or four: farthest first (insertion sort by entry distance, lanes in
-                    // order), the nearest is visited now, the others later (nearer ones first).
-                    let mut hits = [Entry::default(); WIDTH];
-                    let mut count = 0;
-                    let mut lanes = entered;
-                    while lanes != 0 {
-                        let entry = entry(lanes.trailing_zeros() as usize % WIDTH);
-                        lanes &= lanes - 1;
-                        let mut i = count;
-                        while i > 0 && hits[i - 1].t < entry.t {
-                            hits[i] = hits[i - 1];
-                            i -= 1;
-                        }
-                        hits[i] = entry;
-                        count += 1;
+                    // Three or four: all four lanes sorted by entry distance, farthest first
+                    // (the lanes not entered, at `+∞`, come first and are left out); the nearest
+                    // is visited now, the others later (nearer ones first).
+                    let sorted = sort_lanes(&t);
+                    let count = entered.count_ones() as usize;
+                    for &key in &sorted[WIDTH - count..WIDTH - 1] {
+                        stack.push(entry(key as usize % WIDTH));
                     }
-                    for entry in &hits[..count - 1] {
-                        stack.push(*entry);
-                    }
-                    current = hits[count - 1];
+                    current = entry(sorted[WIDTH - 1] as usize % WIDTH);
                     continue;
                 }
             } else if current.meta & TRIANGLES != 0 {
@@ -179,11 +219,11 @@ impl Bvh {
                     let lane = lanes_hit.trailing_zeros() as usize % WIDTH;
                     lanes_hit &= lanes_hit - 1;
                     let (t, prim) = (distances.to_array()[lane], block.ids[lane]);
-                    let limit = if best.is_some_and(|b| prim < b) { t_tie } else { t_best };
+                    let limit = if prim < best { t_tie } else { t_best };
                     if t < limit {
                         t_best = t;
                         t_tie = next_up(t);
-                        best = Some(prim);
+                        best = prim;
                     }
                 }
             } else {
@@ -191,18 +231,18 @@ impl Bvh {
                 for &prim in self.leaf_prims(&child, current.meta) {
                     tally.primitive();
                     // The tie rule (module doc): smaller ids may also hit at exactly `t_best`.
-                    let limit = if best.is_some_and(|b| prim < b) { t_tie } else { t_best };
+                    let limit = if prim < best { t_tie } else { t_best };
                     if let Some(t) = intersect(prim, ray, limit).filter(|&t| t < limit) {
                         t_best = t;
                         t_tie = next_up(t);
-                        best = Some(prim);
+                        best = prim;
                     }
                 }
             }
             // Pop the next child that may still hold a nearer hit (or an equally near one).
             loop {
                 let Some(entry) = stack.pop() else {
-                    return best.map(|prim| (prim, t_best));
+                    return (best != NO_HIT).then_some((best, t_best));
                 };
                 if entry.t <= t_best * ROBUST_EXIT {
                     current = entry;
@@ -218,12 +258,34 @@ impl Bvh {
         &self,
         ray: &Ray,
         t_max: f32,
-        mut occluded: impl FnMut(u32, &Ray, f32) -> bool,
+        occluded: impl FnMut(u32, &Ray, f32) -> bool,
         tally: &mut T,
     ) -> bool {
         if self.nodes.is_empty() || t_max.is_nan() || t_max <= 0.0 {
             return false;
         }
+        match octant(ray) {
+            0 => self.any_hit_in::<0, T>(ray, t_max, occluded, tally),
+            1 => self.any_hit_in::<1, T>(ray, t_max, occluded, tally),
+            2 => self.any_hit_in::<2, T>(ray, t_max, occluded, tally),
+            3 => self.any_hit_in::<3, T>(ray, t_max, occluded, tally),
+            4 => self.any_hit_in::<4, T>(ray, t_max, occluded, tally),
+            5 => self.any_hit_in::<5, T>(ray, t_max, occluded, tally),
+            6 => self.any_hit_in::<6, T>(ray, t_max, occluded, tally),
+            _ => self.any_hit_in::<7, T>(ray, t_max, occluded, tally),
+        }
+    }
+
+    /// [`Bvh::any_hit`] for a tree with nodes, `t_max > 0`, and a ray in octant `OCTANT`
+    /// ([`octant`]).
+    #[inline(always)]
+    fn any_hit_in<const OCTANT: usize, T: Tally>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut occluded: impl FnMut(u32, &Ray, f32) -> bool,
+        tally: &mut T,
+    ) -> bool {
         let test = RayBox::new(ray);
         let lanes = RayLanes::sharing_origin(&test, ray);
         let mut stack: ArrayVec<u32, STACK_SIZE> = ArrayVec::new();
@@ -231,7 +293,7 @@ impl Bvh {
         loop {
             let node = &self.nodes[node_index as usize];
             tally.node(WIDTH as u64);
-            let t = test.entries(node, t_max);
+            let t = test.entries::<OCTANT>(node, t_max);
             let mut entered = entered_lanes(&t);
             while entered != 0 {
                 let lane = entered.trailing_zeros() as usize % WIDTH;
