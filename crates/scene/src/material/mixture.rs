@@ -82,7 +82,7 @@ impl ModelBsdf {
     /// (`Bsdf::new_model`), which wraps it into the `Bsdf` it returns: without an
     /// `Option<ModelBsdf>` in between, the several-hundred-byte value is copied once, not twice.
     #[inline(always)]
-    pub(super) fn new<T>(
+    pub(super) fn build<T>(
         material: &Material,
         point: &ShadingPoint,
         fixed: Vec3,
