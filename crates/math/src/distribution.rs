@@ -30,7 +30,8 @@ impl Distribution1D {
 
     /// [`Distribution1D::new`] for weights already known to be finite and non-negative.
     fn from_valid(weights: &[f32]) -> Option<Self> {
-        if weights.is_empty() {
+        // At most 2^32 − 1 entries: bins are found with `u32` conversions (`bin_of`).
+        if weights.is_empty() || u32::try_from(weights.len()).is_err() {
             return None;
         }
         let mut cdf = Vec::with_capacity(weights.len());
@@ -91,12 +92,22 @@ impl Distribution1D {
     /// [`Distribution1D::sample_continuous`] that also returns the bin.
     #[inline]
     fn sample_continuous_bin(&self, u: f32) -> (f32, f32, usize) {
-        let (index, probability) = self.sample(u);
+        let (x, index) = self.continuous_point(u);
+        (x, self.probability(index) * self.len() as f32, index)
+    }
+
+    /// The point of [`Distribution1D::sample_continuous`] and its bin, without the density.
+    #[inline]
+    fn continuous_point(&self, u: f32) -> (f32, usize) {
+        let target = u * self.total;
+        let index = self.guide.partition_point(&self.cdf, target).min(self.cdf.len() - 1);
         let lo = if index == 0 { 0.0 } else { self.cdf[index - 1] };
         let width = self.cdf[index] - lo;
-        let offset = if width > 0.0 { ((u * self.total - lo) / width).clamp(0.0, 1.0) } else { 0.5 };
+        let offset = if width > 0.0 { ((target - lo) / width).clamp(0.0, 1.0) } else { 0.5 };
         let n = self.len();
-        let mut x = (((index as f64 + offset as f64) / n as f64) as f32).min(ONE_MINUS_EPSILON);
+        // Through `i64`: the same exact values as from `usize` (both below 2^53), one
+        // instruction each instead of an unsigned conversion's several.
+        let mut x = (((index as i64 as f64 + offset as f64) / n as i64 as f64) as f32).min(ONE_MINUS_EPSILON);
         // Rounding must not move the point into the next bin (the pdf looks the bin up the same
         // way).
         while x > 0.0 && bin_of(x, n) > index {
@@ -105,7 +116,7 @@ impl Distribution1D {
         while bin_of(x, n) < index {
             x = f32::from_bits(x.to_bits() + 1);
         }
-        (x, probability * n as f32, index)
+        (x, index)
     }
 
     /// Density per unit length of [`Distribution1D::sample_continuous`] on bin `i`:
@@ -125,10 +136,13 @@ impl Distribution1D {
     }
 }
 
-/// The bin of `x ∈ [0, 1]` among `n` equal bins.
+/// The bin of `x ∈ [0, 1]` among `n` equal bins (`n ≤ 2^32`; negative and NaN products give
+/// bin 0).
 #[inline]
 fn bin_of(x: f32, n: usize) -> usize {
-    ((x * n as f32) as usize).min(n - 1)
+    // `as u32` saturates like `as usize` and is cheaper; with `n ≤ 2^32` the minimum with
+    // `n − 1` is the same either way.
+    ((x * n as i64 as f32) as u32).min((n - 1) as u32) as usize
 }
 
 /// A piecewise-constant density on the unit square `[0, 1)²` over a grid of `width × height`
@@ -189,6 +203,14 @@ impl Distribution2D {
         let (y, pdf_y, row) = self.marginal.sample_continuous_bin(u[1]);
         let (x, pdf_x) = self.conditional[row].sample_continuous(u[0]);
         (Vec2::new(x, y), pdf_x * pdf_y)
+    }
+
+    /// The point of [`Distribution2D::sample`] for the same `u`, without its density.
+    #[inline]
+    pub fn sample_point(&self, u: [f32; 2]) -> Vec2 {
+        let (y, row) = self.marginal.continuous_point(u[1]);
+        let (x, _) = self.conditional[row].continuous_point(u[0]);
+        Vec2::new(x, y)
     }
 
     /// Density per unit area of [`Distribution2D::sample`] at `p ∈ [0, 1]²` (0 outside).
@@ -325,6 +347,33 @@ mod tests {
             / 20.0;
         assert!((integral - 1.0).abs() < 1e-5);
         assert_eq!(d.pdf(Vec2::new(1.5, 0.5)), 0.0);
+    }
+
+    #[test]
+    fn sample_point_is_the_point_of_sample() {
+        let d = Distribution2D::new(&WEIGHTS, 5, 4).unwrap();
+        let mut rng = crate::Rng::new(5, 6);
+        let mut us: Vec<[f32; 2]> = (0..20_000).map(|_| rng.uniform2()).collect();
+        us.extend([[0.0, 0.0], [ONE_MINUS_EPSILON, ONE_MINUS_EPSILON], [0.5, 0.0], [0.0, 0.5]]);
+        for u in us {
+            let (p, _) = d.sample(u);
+            let q = d.sample_point(u);
+            assert_eq!((p.x.to_bits(), p.y.to_bits()), (q.x.to_bits(), q.y.to_bits()), "{u:?}");
+        }
+    }
+
+    #[test]
+    fn bins_agree_with_the_usize_conversion() {
+        for n in [1usize, 2, 3, 7, 255, 1000, 4097] {
+            let mut xs = vec![0.0, -0.0, 1.0, ONE_MINUS_EPSILON, -1.0, 2.0, f32::NAN, f32::INFINITY];
+            xs.extend((0..=n).flat_map(|i| {
+                let x = i as f32 / n as f32;
+                [x, f32::from_bits(x.to_bits().saturating_sub(1)), f32::from_bits(x.to_bits() + 1)]
+            }));
+            for x in xs {
+                assert_eq!(bin_of(x, n), ((x * n as f32) as usize).min(n - 1), "x = {x}, n = {n}");
+            }
+        }
     }
 
     #[test]

@@ -132,6 +132,21 @@ impl Default for Sampling {
     }
 }
 
+/// `x.floor()`, bit for bit (signed zeros, infinities and NaN included), without the library
+/// call that `f32::floor` is on the baseline x86-64 target: below 2^23 in magnitude the
+/// truncation through `i32` is exact and one step from the floor; from 2^23 on every `f32` is
+/// an integer (or not finite) and its own floor.
+#[inline]
+fn floor(x: f32) -> f32 {
+    if x.abs() < 8_388_608.0 {
+        let t = x as i32 as f32;
+        // `t` is +0 for x in (−1, 1): keep the sign of a zero `x` (⌊−0⌋ = −0).
+        if t > x { t - 1.0 } else { t.copysign(x) }
+    } else {
+        x
+    }
+}
+
 impl Texture {
     /// The value at `uv`, for textures without mesh attributes (a
     /// [`Texture::MeshAttribute`] gives black; see [`Texture::eval_at`]).
@@ -143,13 +158,22 @@ impl Texture {
     /// The value at `point`.
     #[inline]
     pub fn eval_at(&self, point: TexturePoint) -> Rgb {
+        // The common constant is read in place; the rest is one call.
+        match self {
+            Texture::Constant(value) => *value,
+            _ => self.eval_varying(point),
+        }
+    }
+
+    /// [`Texture::eval_at`] of every texture (constants included).
+    fn eval_varying(&self, point: TexturePoint) -> Rgb {
         let uv = point.uv;
         match self {
             Texture::Constant(value) => *value,
             Texture::Checkerboard { color0, color1, to_uv } => {
                 let p = to_uv.apply(uv);
-                let a = p.x - p.x.floor() > 0.5;
-                let b = p.y - p.y.floor() > 0.5;
+                let a = p.x - floor(p.x) > 0.5;
+                let b = p.y - floor(p.y) > 0.5;
                 if a == b { *color0 } else { *color1 }
             }
             Texture::Bitmap { image, to_uv } => lookup(image, to_uv.apply(uv), Sampling::DEFAULT),
@@ -316,6 +340,22 @@ fn lookup(image: &TextureImage, uv: Vec2, sampling: Sampling) -> Rgb {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn floor_is_the_library_floor() {
+        let mut xs = vec![0.0f32, -0.0, 0.5, -0.5, 1.0, -1.0, 8_388_607.5, -8_388_607.5, 8_388_608.0, -8_388_608.0];
+        xs.extend([16_777_216.0, -3e9, 3e9, f32::MAX, f32::MIN, f32::INFINITY, f32::NEG_INFINITY]);
+        xs.extend([f32::from_bits(1), -f32::from_bits(1), f32::MIN_POSITIVE, -f32::MIN_POSITIVE]);
+        xs.extend([1.0 - f32::EPSILON / 2.0, -1.0 + f32::EPSILON / 2.0, 2.0 - f32::EPSILON, -2.0 + f32::EPSILON]);
+        let mut rng = math::Rng::new(2, 3);
+        for scale in [1.0f32, 10.0, 1e4, 1e7, 1e8] {
+            xs.extend((0..20_000).map(|_| (rng.uniform() - 0.5) * 2.0 * scale));
+        }
+        for x in xs {
+            assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "x = {x}");
+        }
+        assert!(floor(f32::NAN).is_nan());
+    }
 
     #[test]
     fn checkerboard_alternates() {

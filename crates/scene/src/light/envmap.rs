@@ -174,12 +174,13 @@ impl EnvMapLight {
         let (s, t) = self.square_of(local);
         // Lattice cell (i0, j0) and the position within it. `as usize` maps negative and NaN
         // values to 0, as `Distribution2D` does when it finds the cell of a point.
+        // (`as u32` saturates as `as usize` does, and costs less; both sizes fit in `u32`.)
         let x = s * d.width_f32;
-        let i0 = (x.max(0.0) as usize).min(d.width - 1);
+        let i0 = (x.max(0.0) as u32).min(d.width as u32 - 1) as usize;
         let fx = (x - i0 as f32).clamp(0.0, 1.0);
         let i1 = if i0 + 1 == d.width { 0 } else { i0 + 1 };
         let y = t * d.cells_y_f32;
-        let j0 = (y.max(0.0) as usize).min(d.height - 2);
+        let j0 = (y.max(0.0) as u32).min(d.height as u32 - 2) as usize;
         let fy = (y - j0 as f32).clamp(0.0, 1.0);
         let (top_row, bottom_row) = (&d.texels[j0 * d.width..], &d.texels[(j0 + 1) * d.width..]);
         let corner = top_row[i0];
@@ -207,7 +208,7 @@ impl EnvMapLight {
     /// [`Light::radiance_on_hit`] does), so the two queries agree exactly. `None` when nothing
     /// is emitted from the sampled direction (or at the poles, where the density is singular).
     fn sample(&self, u: [f32; 2]) -> Option<(Vec3, Rgb, f32)> {
-        let (p, _) = self.data.distribution.sample(u);
+        let p = self.data.distribution.sample_point(u);
         let theta = p.y * PI;
         let mut u_map = p.x + self.data.half_texel;
         if u_map >= 1.0 {
@@ -234,10 +235,24 @@ impl EnvMapLight {
     #[inline]
     fn square_of(&self, v: Vec3) -> (f32, f32) {
         let u = v.x.atan2(-v.z) * (0.5 / PI) - self.data.half_texel;
-        let s = u - u.floor();
+        let s = fraction(u);
         let s = if s >= 1.0 { 0.0 } else { s };
         let t = v.y.clamp(-1.0, 1.0).acos() / PI;
         (s, t.clamp(0.0, 1.0))
+    }
+}
+
+/// `u − ⌊u⌋`, bit for bit, without the library `floor` for `u ∈ [−1, 1)` (the range of the
+/// map's `u`): there `⌊u⌋` is ±0 or −1, and `u − (±0)` is `u + 0` (both turn −0 into +0),
+/// `u − (−1)` is `u + 1`.
+#[inline]
+fn fraction(u: f32) -> f32 {
+    if (0.0..1.0).contains(&u) {
+        u + 0.0
+    } else if (-1.0..0.0).contains(&u) {
+        u + 1.0
+    } else {
+        u - u.floor()
     }
 }
 
@@ -375,6 +390,20 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn fraction_is_u_minus_its_floor() {
+        let mut rng = Rng::new(8, 1);
+        let mut us: Vec<f32> = (0..100_000).map(|_| rng.uniform() * 3.0 - 1.5).collect();
+        us.extend([0.0, -0.0, 1.0, -1.0, -0.5, 0.5, ONE_BELOW_ONE, -ONE_BELOW_ONE, -1.0000001, f32::MIN_POSITIVE]);
+        us.extend([-f32::MIN_POSITIVE, f32::from_bits(1), -f32::from_bits(1), 1e9, -1e9]);
+        for u in us {
+            assert_eq!(fraction(u).to_bits(), (u - u.floor()).to_bits(), "u = {u}");
+        }
+        assert!(fraction(f32::NAN).is_nan());
+    }
+
+    const ONE_BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;
 
     #[test]
     fn a_changed_density_is_detected() {

@@ -80,7 +80,7 @@ impl Bsdf {
         mode: TransportMode,
         hero: Option<f32>,
     ) -> Option<Bsdf> {
-        Some(Bsdf { inner: Inner::Model(ModelBsdf::new(material, point, fixed, mode, hero)?) })
+        ModelBsdf::build(material, point, fixed, mode, hero, |b| Bsdf { inner: Inner::Model(b) })
     }
 
     /// Probability of continuing a path through this vertex (Russian roulette): the largest

@@ -39,12 +39,14 @@ impl DiffuseBsdf {
     /// geometric and the shading normal, behind the surface, or a black reflectance.
     #[inline]
     pub(super) fn new(reflectance: &Texture, point: &ShadingPoint, fixed: Vec3, mode: TransportMode) -> Option<Self> {
+        // Read first, so that no part of the frame is live across a texture call (the value is
+        // the same whether or not the checks below refuse the point).
+        let reflectance = reflectance.eval_at(TexturePoint { uv: point.uv, attribute: point.attribute });
         let at = FixedFrame::new(point, oriented_shading_normal(point), fixed, mode);
         // Lambertian is not relaxed (`LeafModel::follows_shading_normal` is false).
         if !sides_allowed(false, at.cos_fixed_geometric, at.local_fixed.z) {
             return None;
         }
-        let reflectance = reflectance.eval_at(TexturePoint { uv: point.uv, attribute: point.attribute });
         // The mixture's component weight: 0 from behind (one-sided), else the luminance.
         let weight = if at.local_fixed.z <= 0.0 { 0.0 } else { reflectance.luminance() };
         if !positive(weight) {

@@ -60,6 +60,14 @@ pub(super) trait LeafModel {
     /// Per-channel albedo estimate for the fixed direction `w` (for Russian roulette).
     fn albedo(&self, w: Vec3) -> Rgb;
 
+    /// [`LeafModel::lobe_probabilities`] and [`LeafModel::albedo`] of the fixed direction `w`
+    /// (bit for bit); models override it to share work between the two, and may remember what
+    /// later queries with the same fixed direction need. Asked of one-sided models only for
+    /// `w.z > 0`.
+    fn lobes_and_albedo(&mut self, w: Vec3) -> ([f32; 2], Rgb) {
+        (self.lobe_probabilities(w), self.albedo(w))
+    }
+
     /// The non-delta part for the local directions `fixed` and `generated`: the BSDF in the
     /// shading frame (`f_s(fixed, generated)` in radiance mode, `f_s(generated, fixed)` in
     /// importance mode), the solid-angle density of generating `generated` from `fixed` with
@@ -73,6 +81,12 @@ pub(super) trait LeafModel {
         p_fixed: [f32; 2],
         p_generated: [f32; 2],
     ) -> ModelEval;
+
+    /// [`LeafModel::evaluate`] with `p_generated` the [`LeafModel::lobe_probabilities`] of
+    /// `generated` (bit for bit); models override it to share work with the evaluation.
+    fn evaluate_generated(&self, fixed: Vec3, generated: Vec3, mode: TransportMode, p_fixed: [f32; 2]) -> ModelEval {
+        self.evaluate(fixed, generated, mode, p_fixed, self.lobe_probabilities(generated))
+    }
 
     /// Samples lobe `lobe` for the local `fixed` direction with `u[0..2]` (direction) and
     /// `u[2]` (any further discrete choice).
@@ -264,26 +278,25 @@ impl Model {
         each_model!(self, m => m.selection_weight()).max(0.0)
     }
 
-    /// See [`LeafModel::albedo`]; black from behind a one-sided model.
+    /// See [`LeafModel::lobes_and_albedo`]; black albedo from behind a one-sided model.
     #[inline]
-    pub(super) fn albedo(&self, w: Vec3) -> Rgb {
+    pub(super) fn lobes_and_albedo(&mut self, w: Vec3) -> ([f32; 2], Rgb) {
         if self.one_sided() && w.z <= 0.0 {
-            return Rgb::BLACK;
+            return (self.lobe_probabilities(w), Rgb::BLACK);
         }
-        each_model!(self, m => m.albedo(w))
+        each_model!(self, m => m.lobes_and_albedo(w))
     }
 
-    /// See [`LeafModel::evaluate`].
+    /// See [`LeafModel::evaluate_generated`].
     #[inline]
-    pub(super) fn evaluate(
+    pub(super) fn evaluate_generated(
         &self,
         fixed: Vec3,
         generated: Vec3,
         mode: TransportMode,
         p_fixed: [f32; 2],
-        p_generated: [f32; 2],
     ) -> ModelEval {
-        each_model!(self, m => m.evaluate(fixed, generated, mode, p_fixed, p_generated))
+        each_model!(self, m => m.evaluate_generated(fixed, generated, mode, p_fixed))
     }
 
     /// See [`LeafModel::sample`]; `None` from behind a one-sided model.

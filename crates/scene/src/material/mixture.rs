@@ -77,13 +77,19 @@ impl Component {
 }
 
 impl ModelBsdf {
-    pub(super) fn new(
+    /// The BSDF of `material` at `point` for the unit `fixed` direction, handed to `wrap`
+    /// (`None` when it cannot scatter). Always inlined into its one caller
+    /// (`Bsdf::new_model`), which wraps it into the `Bsdf` it returns: without an
+    /// `Option<ModelBsdf>` in between, the several-hundred-byte value is copied once, not twice.
+    #[inline(always)]
+    pub(super) fn build<T>(
         material: &Material,
         point: &ShadingPoint,
         fixed: Vec3,
         mode: TransportMode,
         hero: Option<f32>,
-    ) -> Option<ModelBsdf> {
+        wrap: impl FnOnce(ModelBsdf) -> T,
+    ) -> Option<T> {
         let geometric = point.geometric_normal;
         let mut shading = oriented_shading_normal(point);
         // A perturbed normal is mirrored for a camera-side direction below it (in importance
@@ -135,7 +141,7 @@ impl ModelBsdf {
             None => bsdf.add(material, uv, 1.0, 1.0, hero),
         }
         bsdf.select_lobes()?;
-        Some(bsdf)
+        Some(wrap(bsdf))
     }
 
     /// The lobe and component selection probabilities and the continuation probability for
@@ -149,8 +155,9 @@ impl ModelBsdf {
         let mut albedo = Rgb::BLACK;
         for c in &mut bsdf.components[..bsdf.count] {
             let w = c.orient(local_fixed);
-            c.lobes = c.model.lobe_probabilities(w);
-            albedo += c.model.albedo(w) * c.scale;
+            let (lobes, model_albedo) = c.model.lobes_and_albedo(w);
+            c.lobes = lobes;
+            albedo += model_albedo * c.scale;
             c.probability = c.selection_weight(w);
             total_weight += c.probability;
         }
@@ -302,8 +309,7 @@ impl ModelBsdf {
         for c in &self.components[..self.count] {
             let fixed = c.orient(self.at.local_fixed);
             let generated = c.orient(local);
-            let p_generated = c.model.lobe_probabilities(generated);
-            let e = c.model.evaluate(fixed, generated, self.at.mode, c.lobes, p_generated);
+            let e = c.model.evaluate_generated(fixed, generated, self.at.mode, c.lobes);
             value += e.value * c.scale;
             pdf.forward.0 += c.probability * e.forward;
             let reverse_probability = if self.count == 1 {

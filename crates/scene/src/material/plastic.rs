@@ -9,7 +9,6 @@ use spectrum::Rgb;
 use super::coating::Coating;
 use super::diffuse::sample_cosine;
 use super::dispatch::LeafModel;
-use super::fresnel::fresnel_dielectric;
 use super::lobe::{ModelEval, Sampled, mirror_local};
 use super::query::LobeKind;
 use super::shading::TransportMode;
@@ -45,6 +44,17 @@ impl LeafModel for Plastic {
         self.coating.albedo(w.z)
     }
 
+    fn lobes_and_albedo(&mut self, w: Vec3) -> ([f32; 2], Rgb) {
+        self.coating.lobes_and_albedo(w.z)
+    }
+
+    fn evaluate_generated(&self, fixed: Vec3, generated: Vec3, _: TransportMode, p_fixed: [f32; 2]) -> ModelEval {
+        if fixed.z <= 0.0 || generated.z <= 0.0 {
+            return ModelEval::default();
+        }
+        self.coating.diffuse_eval_generated(fixed, generated, p_fixed).0
+    }
+
     fn evaluate(
         &self,
         fixed: Vec3,
@@ -64,7 +74,8 @@ impl LeafModel for Plastic {
         Some(if lobe == 0 {
             Sampled::Delta {
                 direction: mirror_local(fixed),
-                rho: c.specular * fresnel_dielectric(fixed.z, c.eta),
+                // `fresnel_dielectric(fixed.z, η)`, remembered from the lobe selection.
+                rho: c.specular * c.fixed_interface(fixed.z).0,
                 lobe: LobeKind::SpecularReflection,
             }
         } else {

@@ -63,6 +63,18 @@ impl LeafModel for RoughPlastic {
         self.coating.albedo(w.z)
     }
 
+    fn lobes_and_albedo(&mut self, w: Vec3) -> ([f32; 2], Rgb) {
+        self.coating.lobes_and_albedo(w.z)
+    }
+
+    fn evaluate_generated(&self, fixed: Vec3, generated: Vec3, _: TransportMode, p_fixed: [f32; 2]) -> ModelEval {
+        if fixed.z <= 0.0 || generated.z <= 0.0 {
+            return ModelEval::default();
+        }
+        let (e, p_generated) = self.coating.diffuse_eval_generated(fixed, generated, p_fixed);
+        self.add_glossy(e, fixed, generated, p_fixed, p_generated)
+    }
+
     fn evaluate(
         &self,
         fixed: Vec3,
@@ -74,8 +86,28 @@ impl LeafModel for RoughPlastic {
         if fixed.z <= 0.0 || generated.z <= 0.0 {
             return ModelEval::default();
         }
+        let e = self.coating.diffuse_eval(fixed, generated, p_fixed, p_generated);
+        self.add_glossy(e, fixed, generated, p_fixed, p_generated)
+    }
+
+    fn sample(&self, fixed: Vec3, lobe: usize, u: [f32; 3], _: TransportMode) -> Option<Sampled> {
+        Some(if lobe == 0 { sample_glossy(&self.dist, fixed, u) } else { sample_cosine(u) })
+    }
+}
+
+impl RoughPlastic {
+    /// Adds the coating's microfacet reflection to the diffuse part `e` of
+    /// [`LeafModel::evaluate`] (both directions on the front).
+    #[inline]
+    fn add_glossy(
+        &self,
+        mut e: ModelEval,
+        fixed: Vec3,
+        generated: Vec3,
+        p_fixed: [f32; 2],
+        p_generated: [f32; 2],
+    ) -> ModelEval {
         let (dist, c) = (&self.dist, &self.coating);
-        let mut e = c.diffuse_eval(fixed, generated, p_fixed, p_generated);
         let m = (fixed + generated).normalize();
         let d = dist.d(m);
         if d > 0.0 && m.is_finite() {
@@ -86,9 +118,5 @@ impl LeafModel for RoughPlastic {
             e.reverse += p_generated[0] * dist.g1_visible(generated, m) * d / (4.0 * generated.z);
         }
         e
-    }
-
-    fn sample(&self, fixed: Vec3, lobe: usize, u: [f32; 3], _: TransportMode) -> Option<Sampled> {
-        Some(if lobe == 0 { sample_glossy(&self.dist, fixed, u) } else { sample_cosine(u) })
     }
 }
