@@ -52,6 +52,20 @@ pub(super) fn uniform_grid(
     }
     let grid = Grid::new(dims, 1, density.iter().map(|&v| v as f32).collect()).map_err(|e| p.error(pos, e))?;
     let to_local = grid_to_local(file, d, ctm)?;
+    Ok(density_medium(grid, to_local, to_local, sigma_a.rgb, sigma_s.rgb))
+}
+
+/// The medium of pbrt's density grids (`uniformgrid`, `nanovdb`): σ_t is the one-channel
+/// `grid` times `sigma_a + sigma_s`, σ_s the grid times `sigma_s` (per scene unit of length;
+/// trilinear, zero outside the grid), through `to_local` (world → the grid's unit cube); the
+/// medium fills `region` (world → a unit cube) and is empty outside.
+pub(super) fn density_medium(
+    grid: Grid,
+    to_local: Affine3A,
+    region: Affine3A,
+    sigma_a: Rgb,
+    sigma_s: Rgb,
+) -> Coefficients {
     let grid = Arc::new(grid);
     let volume = |value: Rgb| Volume {
         grid: Some(Arc::clone(&grid)),
@@ -60,9 +74,9 @@ pub(super) fn uniform_grid(
         filter: Filter::Trilinear,
         outside: Outside::Zero,
     };
-    let albedo = Volume::constant(Coefficient::rgb(Rgb::splat(1.0)), to_local);
-    let (sigma_t, sigma_s) = (volume(sigma_a.rgb + sigma_s.rgb), volume(sigma_s.rgb));
-    Ok(Coefficients::Heterogeneous(Arc::new(Heterogeneous::new(sigma_t, albedo, Some(sigma_s), to_local))))
+    let albedo = Volume::constant(Coefficient::rgb(Rgb::splat(1.0)), region);
+    let (sigma_t, sigma_s) = (volume(sigma_a + sigma_s), volume(sigma_s));
+    Coefficients::Heterogeneous(Arc::new(Heterogeneous::new(sigma_t, albedo, Some(sigma_s), region)))
 }
 
 /// `nx ny nz` (each default 1, at least 1).

@@ -16,10 +16,8 @@
 //! widens the box, as in pbrt.
 
 use std::path::Path;
-use std::sync::Arc;
 
-use scene::medium::{Coefficient, Coefficients, Filter, Grid, Heterogeneous, Outside, Volume};
-use spectrum::Rgb;
+use scene::medium::{Coefficient, Coefficients, Grid};
 
 use super::parser::Directive;
 use super::transform::Mat4;
@@ -119,18 +117,7 @@ pub(super) fn nanovdb_grid(
         .ok_or_else(|| at_file(format!("grid \"{density_name}\": its index-to-world map is singular")))?;
     let region = super::grid_medium::affine(&unit_box(region[0], region[1]).mul(&world_to_medium))
         .ok_or_else(|| err(file, d.pos, "the transformation is singular"))?;
-
-    let grid = Arc::new(grid);
-    let volume = |value: Rgb| Volume {
-        grid: Some(Arc::clone(&grid)),
-        value: Coefficient::rgb(value),
-        to_local,
-        filter: Filter::Trilinear,
-        outside: Outside::Zero,
-    };
-    let albedo = Volume::constant(Coefficient::rgb(Rgb::splat(1.0)), region);
-    let (sigma_t, sigma_s) = (volume(sigma_a.rgb + sigma_s.rgb), volume(sigma_s.rgb));
-    Ok(Coefficients::Heterogeneous(Arc::new(Heterogeneous::new(sigma_t, albedo, Some(sigma_s), region))))
+    Ok(super::grid_medium::density_medium(grid, to_local, region, sigma_a.rgb, sigma_s.rgb))
 }
 
 /// The float grid `name` of `nvdb`, which must be a fog volume or of unknown class (as pbrt-v4
