@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use io::nanovdb::NanoVdbFile;
+use math::rng::Rng;
 use scene::desc::SceneDescription;
 use scene::medium::Medium;
 use spectrum::Rgb;
@@ -350,13 +351,8 @@ fn emitting_temperature_grids_are_errors() {
 fn corrupted_files_are_errors_not_panics() {
     let dir = fixtures();
     let raw = ramp_bytes();
-    let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        state
-    };
+    let mut rng = Rng::new(0x9e37_79b9_7f4a_7c15, 0);
+    let mut next = move || rng.next_u32();
     let path = dir.join("corrupt.nvdb");
     for round in 0..300 {
         let mut bytes = raw.clone();
