@@ -72,10 +72,7 @@ impl Coating {
     /// (smooth) or the rough table's.
     #[inline]
     pub(super) fn transmittance(&self, cos: f32) -> f32 {
-        match self.rough {
-            None => 1.0 - fresnel_dielectric(cos, self.eta),
-            Some(table) => table.transmittance(cos),
-        }
+        self.interface(cos).1
     }
 
     /// Probabilities of [specular, diffuse] for a direction with local cosine `cos` (Mitsuba:
@@ -181,10 +178,7 @@ impl Coating {
     /// `cos > 0`.
     #[inline]
     fn reflectance(&self, cos: f32) -> f32 {
-        match self.rough {
-            None => fresnel_dielectric(cos, self.eta),
-            Some(table) => 1.0 - table.transmittance(cos),
-        }
+        self.interface(cos).0
     }
 
     /// Albedo estimate `(1 − T)·specular + T·diffuse` for a direction with local cosine `cos`.
