@@ -23,6 +23,10 @@
 // - background.nvdb: ZIP; a float grid "density" with background 0.5 and a few active voxels.
 // - double.nvdb: ZIP; a double-precision grid "density" (an unsupported grid type).
 // - levelset.nvdb: ZIP; a level-set sphere "density" (class SDF, not a fog volume).
+// - rim.nvdb: ZIP; a float grid "density" under rampMap() whose active voxels fill the box
+//   rimLo..rimHi, with rim() below: positive inside, 0 on the box's outer layer (set active, so
+//   the grid's bounding box is the whole box). Its medium is then the same function as a
+//   pbrt uniformgrid of the same voxels (nothing for pbrt's clipping to the world box to cut).
 
 #define NANOVDB_USE_ZIP 1
 #include <nanovdb/NanoVDB.h>
@@ -88,6 +92,14 @@ static nanovdb::GridHandle<> rampGrid(const char* name) {
     builder(f, CoordBBox(Coord(40, -3, 30), Coord(47, -1, 33)));
     builder(f, CoordBBox(Coord(40, 8, 0), Coord(55, 15, 7)));
     return builder.getHandle<>(rampMap(), name);
+}
+
+// The rim grid's voxel box and values: a ramp strictly inside, 0 on the outer layer.
+static const Coord rimLo(-3, -2, 0), rimHi(12, 9, 13);
+static float rim(const Coord& c) {
+    for (int a = 0; a < 3; ++a)
+        if (c[a] <= rimLo[a] || c[a] >= rimHi[a]) return 0.0f;
+    return float(3 * (c[0] - rimLo[0]) + 5 * (c[1] - rimLo[1]) + 7 * (c[2] - rimLo[2])) / 64.0f;
 }
 
 static void gzipFile(const std::string& from, const std::string& to) {
@@ -186,6 +198,15 @@ int main(int argc, char** argv) {
         builder([](const Coord&) { return 1.0; }, CoordBBox(Coord(0, 0, 0), Coord(2, 2, 2)));
         nanovdb::io::writeGrid(dir + "/double.nvdb", builder.getHandle<>(1.0, nanovdb::Vec3d(0.0), "density"),
                                Codec::ZIP);
+    }
+
+    {
+        nanovdb::GridBuilder<float> builder(0.0f, nanovdb::GridClass::FogVolume);
+        auto acc = builder.getAccessor();
+        for (int i = rimLo[0]; i <= rimHi[0]; ++i)
+            for (int j = rimLo[1]; j <= rimHi[1]; ++j)
+                for (int k = rimLo[2]; k <= rimHi[2]; ++k) acc.setValue(Coord(i, j, k), rim(Coord(i, j, k)));
+        nanovdb::io::writeGrid(dir + "/rim.nvdb", builder.getHandle<>(rampMap(), "density"), Codec::ZIP);
     }
 
     nanovdb::io::writeGrid(dir + "/levelset.nvdb",

@@ -6,6 +6,8 @@
 //! - the medium at 400 world points equals NanoVDB's own world-to-index map and trilinear
 //!   sampler (`ramp-samples.txt`), also through a pbrt transformation, and equals the same grid
 //!   written as a pbrt `uniformgrid`;
+//! - pbrt's clipping to the grid's world box: a grid with a zero outer layer (`rim.nvdb`) is
+//!   the same medium as its `uniformgrid` everywhere, and a non-zero outer layer is cut;
 //! - the background fills voxels without values;
 //! - errors (file, line, what): missing grid, truncated and corrupted files, wrong magic,
 //!   Blosc and unknown codecs, a double grid, a level set, emitting temperature grids.
@@ -185,19 +187,23 @@ fn the_medium_samples_as_nanovdb_does() {
     }
 }
 
-#[test]
-fn nanovdb_equals_the_same_grid_as_a_uniformgrid() {
-    // The uniformgrid of the ramp's voxels −12…57 × −5…17 × −2…35 in the ramp's index space
-    // (value i at i + ½ of the box from lo − ½), placed by the ramp's map as a pbrt transform.
-    let dir = fixtures();
-    let grid = NanoVdbFile::read(&dir.join("ramp.nvdb")).unwrap().float_grid("density").unwrap().unwrap();
+/// A pbrt `uniformgrid` medium (σ_a 1, σ_s 2) holding `value` of the voxels `lo … lo + n − 1` of
+/// `file`'s density grid, voxel `i` at index point `i` (the box from `lo − ½`), placed by the
+/// grid's index-to-world map as a pbrt transformation.
+fn uniformgrid_of(
+    dir: &Path,
+    file: &str,
+    lo: [i64; 3],
+    n: [i64; 3],
+    value: impl Fn(i64, i64, i64) -> f32,
+) -> SceneDescription {
+    let grid = NanoVdbFile::read(&dir.join(file)).unwrap().float_grid("density").unwrap().unwrap();
     let (m, t) = (grid.matrix, grid.translation);
-    let (lo, n) = ([-12i64, -5, -2], [70i64, 23, 38]);
     let mut density = Vec::new();
     for k in 0..n[2] {
         for j in 0..n[1] {
             for i in 0..n[0] {
-                density.push(format!("{}", ramp(lo[0] + i, lo[1] + j, lo[2] + k)));
+                density.push(format!("{}", value(lo[0] + i, lo[1] + j, lo[2] + k)));
             }
         }
     }
@@ -207,8 +213,8 @@ fn nanovdb_equals_the_same_grid_as_a_uniformgrid() {
     );
     let p0 = lo.map(|x| x as f64 - 0.5);
     let p1 = [0, 1, 2].map(|a| p0[a] + n[a] as f64);
-    let uniform = pbrt(
-        &dir,
+    pbrt(
+        dir,
         &format!(
             "AttributeBegin\n{transform}\nMakeNamedMedium \"u\" \"string type\" \"uniformgrid\" \"integer nx\" {} \"integer ny\" {} \"integer nz\" {} \"point3 p0\" [{} {} {}] \"point3 p1\" [{} {} {}] \"float density\" [{}] \"float sigma_a\" 1 \"float sigma_s\" 2\nAttributeEnd",
             n[0],
@@ -223,12 +229,25 @@ fn nanovdb_equals_the_same_grid_as_a_uniformgrid() {
             density.join(" ")
         ),
     )
-    .unwrap();
-    let nano = pbrt(
-        &dir,
-        "MakeNamedMedium \"n\" \"string type\" \"nanovdb\" \"string filename\" \"ramp.nvdb\" \"float sigma_a\" 1 \"float sigma_s\" 2",
+    .unwrap()
+}
+
+/// pbrt's `nanovdb` medium of `file`'s density grid, σ_a 1, σ_s 2.
+fn nanovdb_of(dir: &Path, file: &str) -> SceneDescription {
+    pbrt(
+        dir,
+        &format!("MakeNamedMedium \"n\" \"string type\" \"nanovdb\" \"string filename\" \"{file}\" \"float sigma_a\" 1 \"float sigma_s\" 2"),
     )
-    .unwrap();
+    .unwrap()
+}
+
+#[test]
+fn nanovdb_equals_the_same_grid_as_a_uniformgrid() {
+    // The uniformgrid of the ramp's voxels −12…57 × −5…17 × −2…35 (two zero layers around
+    // the active box).
+    let dir = fixtures();
+    let uniform = uniformgrid_of(&dir, "ramp.nvdb", [-12, -5, -2], [70, 23, 38], ramp);
+    let nano = nanovdb_of(&dir, "ramp.nvdb");
     let (u, v) = (&uniform.media.media[0], &nano.media.media[0]);
     for (p, _) in samples() {
         let (a, b) = (at(u, p), at(v, p));
@@ -237,6 +256,68 @@ fn nanovdb_equals_the_same_grid_as_a_uniformgrid() {
             "{p:?}: {a:?} {b:?}"
         );
     }
+}
+
+/// The generator's `rim()`: a ramp strictly inside the box −3…12 × −2…9 × 0…13, 0 on its
+/// outer layer and outside.
+fn rim(i: i64, j: i64, k: i64) -> f32 {
+    let (lo, hi) = ([-3, -2, 0], [12, 9, 13]);
+    let c = [i, j, k];
+    if (0..3).any(|a| c[a] <= lo[a] || c[a] >= hi[a]) {
+        return 0.0;
+    }
+    (3 * (i - lo[0]) + 5 * (j - lo[1]) + 7 * (k - lo[2])) as f32 / 64.0
+}
+
+/// The world point of index-space point `q` under `file`'s map.
+fn world(dir: &Path, file: &str, q: [f64; 3]) -> [f32; 3] {
+    let grid = NanoVdbFile::read(&dir.join(file)).unwrap().float_grid("density").unwrap().unwrap();
+    let (m, t) = (grid.matrix, grid.translation);
+    [0, 1, 2].map(|r| (m[r][0] * q[0] + m[r][1] * q[1] + m[r][2] * q[2] + t[r]) as f32)
+}
+
+/// pbrt-v4 clips a NanoVDB medium to the grid's world box: the axis-aligned box, in medium
+/// space, around the index box of the active voxels from `lo` to `hi + 1` under the grid's map.
+/// A `uniformgrid` of the same voxels (voxel `i` at `i`) interpolates from `lo − ½` to `hi + ½`
+/// of the index box. With the fixtures' rotated map the two differ only in the parts of the
+/// index shell `lo − ½ … lo` outside the world box (along the index box's extreme edges), and
+/// only where the outer voxels are not 0. This checks both halves on points around the boxes.
+#[test]
+fn the_world_box_clips_the_medium_as_in_pbrt() {
+    let dir = fixtures();
+    std::fs::copy(data("rim.nvdb"), dir.join("rim.nvdb")).unwrap();
+    let grid = NanoVdbFile::read(&dir.join("rim.nvdb")).unwrap().float_grid("density").unwrap().unwrap();
+    assert_eq!(grid.index_bounds(), [[-3, -2, 0], [12, 9, 13]], "the zero rim is active");
+    let uniform = uniformgrid_of(&dir, "rim.nvdb", [-5, -4, -2], [20, 16, 18], rim);
+    let nano = nanovdb_of(&dir, "rim.nvdb");
+    let (u, v) = (&uniform.media.media[0], &nano.media.media[0]);
+    let mut rng = Rng::new(11, 0);
+    let mut nonzero = 0;
+    for _ in 0..4000 {
+        // Index points in the box grown by 1.5 voxels: the shells where the two boxes differ.
+        let q = [0, 1, 2].map(|a| {
+            let (lo, hi) = ([-3.0, -2.0, 0.0][a], [13.0, 10.0, 14.0][a]);
+            lo - 1.5 + (hi - lo + 3.0) * f64::from(rng.uniform())
+        });
+        let p = world(&dir, "rim.nvdb", q);
+        let (a, b) = (at(u, p), at(v, p));
+        assert!(
+            (a.0.r - b.0.r).abs() <= 3.0 * TOLERANCE && (a.1.r - b.1.r).abs() <= 2.0 * TOLERANCE,
+            "index {q:?}: uniformgrid {a:?}, nanovdb {b:?}"
+        );
+        nonzero += usize::from(b.0.r > 0.0);
+    }
+    assert!(nonzero > 1000, "{nonzero} points with density");
+    // With a non-zero outer layer: the ramp's world z is 0.05 (sin 20° j + cos 20° k) + 0.5,
+    // smallest on the index box's edge j = −3, k = 0, where the first box's voxels are non-zero.
+    // Beyond that edge the uniformgrid still interpolates; the NanoVDB medium has ended.
+    let uniform = uniformgrid_of(&dir, "ramp.nvdb", [-12, -5, -2], [70, 23, 38], ramp);
+    let nano = nanovdb_of(&dir, "ramp.nvdb");
+    let p = world(&dir, "ramp.nvdb", [0.0, -3.25, -0.25]);
+    let (a, b) = (at(&uniform.media.media[0], p), at(&nano.media.media[0], p));
+    let expected = 0.75 * 0.75 * ramp(0, -3, 0) * 3.0;
+    assert!((a.0.r - expected).abs() <= 3.0 * TOLERANCE, "uniformgrid {a:?}, expected σ_t {expected}");
+    assert_eq!(b.0.r, 0.0, "nanovdb outside its world box: {b:?}");
 }
 
 #[test]
