@@ -760,8 +760,8 @@ impl<S: SpectralMode> Engine<S> {
                 .enumerate()
                 .map(|(row, (pixels, technique_row))| trace_row(batch * rows_per_batch + row, pixels, technique_row))
                 .collect();
-            for (splats, families, row_rejected) in rows {
-                self.splat_sums.add(&scene.camera, splats);
+            for (mut splats, families, row_rejected) in rows {
+                self.splat_sums.add(&scene.camera, &mut splats);
                 if let Some(frames) = family_frames.as_deref_mut() {
                     frames.extend_from_slice(&families);
                 }
@@ -882,18 +882,22 @@ pub(crate) const LIGHT_BATCH: usize = 16 * LIGHT_CHUNK;
 
 /// Traces the `pixel_count` light sub-paths of `iteration` in batches of parallel chunks and
 /// hands each chunk to `take`, in path order (deterministic for any thread count); a batch is
-/// handed over before the next one is traced.
+/// handed over before the next one is traced. The chunks' buffers are reused from batch to
+/// batch (`take` may empty them; they are cleared before the next batch), so after the first
+/// batch tracing neither allocates nor grows them.
 fn trace_in_batches<S: SpectralMode>(
     scene: &Scene,
     (seed, iteration): (u64, u64),
     it: &Iteration,
     pixel_count: usize,
     sets: &WavelengthSource<S>,
-    mut take: impl FnMut(LightChunk<S>),
+    mut take: impl FnMut(&mut LightChunk<S>),
 ) {
+    let mut chunks = Vec::new();
     for batch in (0..pixel_count).step_by(LIGHT_BATCH) {
         let paths = batch..(batch + LIGHT_BATCH).min(pixel_count);
-        trace_light_chunks(scene, seed, iteration, it, paths, sets).into_iter().for_each(&mut take);
+        trace_light_chunks(scene, seed, iteration, it, paths, sets, &mut chunks);
+        chunks.iter_mut().for_each(&mut take);
     }
 }
 
@@ -910,7 +914,7 @@ fn trace_light_pass<S: SpectralMode>(
 ) {
     trace_in_batches(scene, (seed, iteration), it, pixel_count, sets, |(vertices, ends, chunk_splats)| {
         let base = store.vertices.len() as u32;
-        store.vertices.extend_from_slice(&vertices);
+        store.vertices.extend_from_slice(vertices);
         store.path_ends.extend(ends.iter().map(|e| e + base));
         splats.add(&scene.camera, chunk_splats);
     });
@@ -937,7 +941,9 @@ fn trace_merge_records<S: SpectralMode>(
     path_ends
 }
 
-/// Traces the light sub-paths `paths` of `iteration` in parallel chunks, in order.
+/// Traces the light sub-paths `paths` of `iteration` in parallel chunks of [`LIGHT_CHUNK`], in
+/// order, into `chunks` (resized to the chunk count; each chunk's buffers are cleared, not
+/// reallocated).
 fn trace_light_chunks<S: SpectralMode>(
     scene: &Scene,
     seed: u64,
@@ -945,24 +951,22 @@ fn trace_light_chunks<S: SpectralMode>(
     it: &Iteration,
     paths: std::ops::Range<usize>,
     sets: &WavelengthSource<S>,
-) -> Vec<LightChunk<S>> {
-    (paths.start..paths.end)
-        .into_par_iter()
-        .step_by(LIGHT_CHUNK)
-        .map(|first| {
-            let mut vertices = Vec::new();
-            let mut ends = Vec::new();
-            let mut splats = Vec::new();
-            let mut codes = NormalCodes::default();
-            for path in first..(first + LIGHT_CHUNK).min(paths.end) {
-                let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
-                let wavelengths = sets.get(seed, iteration, path as u64);
-                trace_light_path(scene, it, &mut rng, &mut vertices, &mut splats, &*wavelengths, &mut codes);
-                ends.push(vertices.len() as u32);
-            }
-            (vertices, ends, splats)
-        })
-        .collect()
+    chunks: &mut Vec<LightChunk<S>>,
+) {
+    chunks.resize_with(paths.len().div_ceil(LIGHT_CHUNK), Default::default);
+    chunks.par_iter_mut().enumerate().for_each(|(c, (vertices, ends, splats))| {
+        vertices.clear();
+        ends.clear();
+        splats.clear();
+        let mut codes = NormalCodes::default();
+        let first = paths.start + c * LIGHT_CHUNK;
+        for path in first..(first + LIGHT_CHUNK).min(paths.end) {
+            let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
+            let wavelengths = sets.get(seed, iteration, path as u64);
+            trace_light_path(scene, it, &mut rng, vertices, splats, &*wavelengths, &mut codes);
+            ends.push(vertices.len() as u32);
+        }
+    });
 }
 
 /// Fills `frame` (and the family and technique frames, if recorded) with `trace(pixel,

@@ -47,12 +47,14 @@ impl SplatSums {
 
     /// Adds `splats`, the next ones in light sub-path order: a pixel splat to its pixel, a
     /// filtered splat to every pixel within the camera filter's radius, weighted by the filter.
-    pub(super) fn add(&mut self, camera: &Camera, splats: Vec<Splat>) {
+    /// The splats are moved out of `splats` when kept; otherwise `splats` is left as it was (the
+    /// caller may reuse its allocation).
+    pub(super) fn add(&mut self, camera: &Camera, splats: &mut Vec<Splat>) {
         self.count += splats.len();
         if !splats.is_empty() && self.sums.is_empty() {
             self.sums.resize(self.pixels, Rgb::BLACK);
         }
-        for splat in &splats {
+        for splat in splats.iter() {
             if !splat.value.is_finite() {
                 self.rejected += 1;
             }
@@ -60,7 +62,7 @@ impl SplatSums {
             spread(camera, splat, |pixel, value| sums[pixel as usize] += value);
         }
         if self.keep {
-            self.kept.push(splats);
+            self.kept.push(std::mem::take(splats));
         }
     }
 
