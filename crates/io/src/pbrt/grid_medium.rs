@@ -29,13 +29,7 @@ pub(super) fn uniform_grid(
     sigma_s: &Coefficient,
 ) -> Result<Coefficients, SceneError> {
     let p = &d.params;
-    if sigma_a.spectrum.is_some() || sigma_s.spectrum.is_some() {
-        return Err(err(
-            file,
-            d.pos,
-            "uniformgrid: tabulated sigma_a / sigma_s spectra are not supported (rgb or float)",
-        ));
-    }
+    rgb_coefficients_only(file, d, "uniformgrid", sigma_a, sigma_s)?;
     if let Some(t) = p.find("temperature") {
         return Err(p.error(t.pos, "uniformgrid: temperature grids (emission) are not supported"));
     }
@@ -53,6 +47,25 @@ pub(super) fn uniform_grid(
     let grid = Grid::new(dims, 1, density.iter().map(|&v| v as f32).collect()).map_err(|e| p.error(pos, e))?;
     let to_local = grid_to_local(file, d, ctm)?;
     Ok(density_medium(grid, to_local, to_local, sigma_a.rgb, sigma_s.rgb))
+}
+
+/// The error of pbrt's density-grid media (`kind`: `uniformgrid`, `nanovdb`) for tabulated
+/// `sigma_a` / `sigma_s` spectra: the grid scales RGB (or float) coefficients only.
+pub(super) fn rgb_coefficients_only(
+    file: &Path,
+    d: &Directive,
+    kind: &str,
+    sigma_a: &Coefficient,
+    sigma_s: &Coefficient,
+) -> Result<(), SceneError> {
+    if sigma_a.spectrum.is_some() || sigma_s.spectrum.is_some() {
+        return Err(err(
+            file,
+            d.pos,
+            format!("{kind}: tabulated sigma_a / sigma_s spectra are not supported (rgb or float)"),
+        ));
+    }
+    Ok(())
 }
 
 /// The medium of pbrt's density grids (`uniformgrid`, `nanovdb`): σ_t is the one-channel

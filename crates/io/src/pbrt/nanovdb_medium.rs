@@ -35,9 +35,7 @@ pub(super) fn nanovdb_grid(
     sigma_s: &Coefficient,
 ) -> Result<Coefficients, SceneError> {
     let p = &d.params;
-    if sigma_a.spectrum.is_some() || sigma_s.spectrum.is_some() {
-        return Err(err(file, d.pos, "nanovdb: tabulated sigma_a / sigma_s spectra are not supported (rgb or float)"));
-    }
+    super::grid_medium::rgb_coefficients_only(file, d, "nanovdb", sigma_a, sigma_s)?;
     let Some((filename, fpos)) = p.string("filename")? else {
         return Err(err(file, d.pos, "the nanovdb medium needs a \"string filename\""));
     };
