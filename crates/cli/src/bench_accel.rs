@@ -76,7 +76,13 @@ pub fn run(scene: &Scene, threads: usize) {
         |r, c| bvh.closest_hit_counted(r, f32::INFINITY, |i, r, t| intersect(scene, i, r, t), c).is_some(),
         |r, t, c| bvh.any_hit_counted(r, t, |i, r, t| intersect(scene, i, r, t).is_some(), c),
     );
-    println!("  4-wide BVH, per ray: {wide}");
+    let stats = bvh.stats();
+    println!(
+        "  8-wide BVH: {} nodes ({:.2} children each), depth {}; per ray: {wide}",
+        stats.wide_nodes,
+        (stats.wide_nodes - 1 + stats.leaves) as f64 / stats.wide_nodes as f64,
+        stats.wide_max_depth
+    );
     #[cfg(feature = "binary-bvh")]
     binary_comparison(scene, &bounds, &bvh, &rays);
 }
@@ -184,7 +190,7 @@ fn binary_comparison(scene: &Scene, bounds: &[Aabb], bvh: &Bvh, rays: &Rays) {
     assert_eq!(checks[0], checks[1], "the two trees disagree on the number of hits");
     let rate = |n: usize, t: Duration| (n * ROUNDS) as f64 / t.as_secs_f64() / 1e6;
     println!(
-        "  A/B, 1 thread (its CPU time), {ROUNDS} interleaved rounds: closest {:.2} (4-wide) vs {:.2} (binary) Mrays/s = {:.2}x; \
+        "  A/B, 1 thread (its CPU time), {ROUNDS} interleaved rounds: closest {:.2} (8-wide) vs {:.2} (binary) Mrays/s = {:.2}x; \
          shadow {:.2} vs {:.2} Mrays/s = {:.2}x",
         rate(rays.closest.len(), times[0][0]),
         rate(rays.closest.len(), times[1][0]),

@@ -1,14 +1,14 @@
 //! BVH benchmark: builds the tree over a ~1M-triangle noisy tessellated sphere and measures
 //! closest-hit and any-hit (shadow) throughput for incoherent random rays, on one thread and on
-//! all cores, for `scene::accel::Bvh` (4-wide) and, for comparison, the previous binary
+//! all cores, for `scene::accel::Bvh` (8-wide) and, for comparison, the previous binary
 //! traversal (`scene::accel::BinaryBvh`) and the `obvhs` crate's CWBVH. Also counts the work per
-//! ray (nodes visited, box tests, primitive tests) and times the 4-wide and binary trees in
+//! ray (nodes visited, box tests, primitive tests) and times the 8-wide and binary trees in
 //! interleaved rounds on the same rays.
 //!
 //! Run with `cargo run --release -p scene --features binary-bvh --example bvh_bench [-- STACKS]`
 //! (default 500 stacks, i.e. 4·500² = 1M triangles). With `--features binary-bvh,embree` also
 //! Embree 3 (`scene::accel::EmbreeAccel`, docs/embree.md): build time, the same rows and an
-//! interleaved A/B of our 4-wide tree against Embree.
+//! interleaved A/B of our 8-wide tree against Embree.
 
 use math::{Aabb, Ray, Rng, Vec3, Vec3A, warp};
 use obvhs::BvhBuildParams;
@@ -154,7 +154,7 @@ fn main() {
     let stats = bvh.stats();
     println!(
         "scene::accel::Bvh  build {build_all:.3} s ({threads} threads), {build_one:.3} s (1 thread); \
-         binary tree: {} nodes, {} leaves, depth {}, SAH cost {:.1}; 4-wide: {} nodes, depth {}",
+         binary tree: {} nodes, {} leaves, depth {}, SAH cost {:.1}; 8-wide: {} nodes, depth {}",
         stats.nodes, stats.leaves, stats.max_depth, stats.sah_cost, stats.wide_nodes, stats.wide_max_depth
     );
     let binary = BinaryBvh::build(&bounds);
@@ -229,7 +229,7 @@ fn main() {
         }
         let per = |x: u64| x as f64 / sample as f64;
         println!(
-            "{name}: per ray, 4-wide: {:.2} nodes, {:.2} box tests; binary: {:.2} nodes, {:.2} box tests",
+            "{name}: per ray, 8-wide: {:.2} nodes, {:.2} box tests; binary: {:.2} nodes, {:.2} box tests",
             per(wide.nodes),
             per(wide.box_tests),
             per(bin.nodes),
@@ -252,7 +252,7 @@ fn main() {
         }
         let theirs = tests.get();
         println!(
-            "{name}: primitive tests per ray: scene::accel 4-wide {:.2}, binary {:.2}, obvhs {:.2}",
+            "{name}: primitive tests per ray: scene::accel 8-wide {:.2}, binary {:.2}, obvhs {:.2}",
             ours as f64 / sample as f64,
             bin.primitives as f64 / sample as f64,
             theirs as f64 / sample as f64
@@ -300,8 +300,8 @@ fn main() {
         );
     };
     single_pool.install(|| {
-        interleaved("closest hit", &rays, ("4-wide", &ours_closest), ("binary", &binary_closest));
-        interleaved("any hit", &shadows, ("4-wide", &ours_any), ("binary", &binary_any));
+        interleaved("closest hit", &rays, ("8-wide", &ours_closest), ("binary", &binary_closest));
+        interleaved("any hit", &shadows, ("8-wide", &ours_any), ("binary", &binary_any));
     });
 
     // --- Embree 3, over the same triangles (ids = indices).
@@ -317,8 +317,8 @@ fn main() {
         report("scene::accel::Bvh any_hit (shadow)", &shadows, &ours_any);
         report("Embree any_hit (shadow)", &shadows, &embree_any);
         single_pool.install(|| {
-            interleaved("closest hit", &rays, ("4-wide", &ours_closest), ("Embree", &embree_closest));
-            interleaved("any hit", &shadows, ("4-wide", &ours_any), ("Embree", &embree_any));
+            interleaved("closest hit", &rays, ("8-wide", &ours_closest), ("Embree", &embree_closest));
+            interleaved("any hit", &shadows, ("8-wide", &ours_any), ("Embree", &embree_any));
         });
     }
 }

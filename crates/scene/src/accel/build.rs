@@ -1,7 +1,7 @@
 //! Construction of the binary SAH tree from primitive bounds: binned SAH over box centroids,
 //! parallel with rayon for large inputs, deterministic for any thread count.
 //!
-//! This file owns only the build; the 4-wide tree that queries use is collapsed from its output
+//! This file owns only the build; the 8-wide tree that queries use is collapsed from its output
 //! (`wide.rs`). See `docs/bvh.md`.
 
 use glam::Vec4;

@@ -1,14 +1,14 @@
 //! The bounding volume hierarchy (BVH) that accelerates ray queries over all primitives.
 //!
 //! This module owns the tree: its construction from primitive bounds (binned SAH, parallel with
-//! rayon for large inputs, then collapsed into 4-wide nodes) and its traversal for nearest hits
+//! rayon for large inputs, then collapsed into 8-wide nodes) and its traversal for nearest hits
 //! and occlusion (any hit). It is primitive-agnostic: the tree only knows each primitive's
 //! bounding box and index, and the caller intersects a primitive in a closure, so triangles and
 //! analytic shapes share one tree; only triangles that need nothing but the geometric test may
 //! be handed to the tree, which then tests them itself ([`Bvh::build_with_triangles`]). See
 //! `docs/bvh.md`.
 //!
-//! Files: `build.rs` (binary SAH build), `binary.rs` (its node layout), `wide.rs` (4-wide nodes
+//! Files: `build.rs` (binary SAH build), `binary.rs` (its node layout), `wide.rs` (8-wide nodes
 //! and the collapse), `ray_box.rs` (the 4-lane slab test), `traverse.rs` (the queries and their
 //! tie rule), `triangle_block.rs` (leaves of plain triangles stored as 4-lane blocks that the
 //! queries test themselves, [`Bvh::build_with_triangles`]), `binary_traverse.rs` (the previous
@@ -67,9 +67,9 @@ pub struct BvhStats {
     /// `Σ_interior A(n)/A(root)·C_trav + Σ_leaf A(n)/A(root)·N(n)·C_isect` with
     /// `C_trav = C_isect = 1`.
     pub sah_cost: f32,
-    /// Nodes of the 4-wide tree that queries traverse (128 bytes each).
+    /// Nodes of the 8-wide tree that queries traverse (256 bytes each).
     pub wide_nodes: usize,
-    /// Depth of the deepest 4-wide node (the root has depth 0).
+    /// Depth of the deepest 8-wide node (the root has depth 0).
     pub wide_max_depth: usize,
 }
 
@@ -77,7 +77,7 @@ pub struct BvhStats {
 /// and tests, which compare trees by counts instead of times.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraversalCounts {
-    /// Nodes visited (for the wide tree one visit tests four child boxes).
+    /// Nodes visited (for the wide tree one visit tests eight child boxes).
     pub nodes: u64,
     /// Ray–box tests (four per wide node visited, two per binary interior node).
     pub box_tests: u64,
@@ -91,7 +91,7 @@ pub struct TraversalCounts {
 /// allocation-free, so one tree can be shared by all threads.
 #[derive(Clone, Debug)]
 pub struct Bvh {
-    /// 4-wide nodes in depth-first order, node 0 the root; empty for a tree without primitives.
+    /// 8-wide nodes in depth-first order, node 0 the root; empty for a tree without primitives.
     nodes: Vec<wide::WideNode>,
     /// Primitive ids, grouped by leaf (leaves of several primitives name a range of it).
     prims: Vec<u32>,
@@ -108,7 +108,7 @@ impl Bvh {
     /// Builds the tree over primitive bounds; primitive ids are indices into `bounds`.
     ///
     /// Uses binned SAH with leaves of at most four primitives, rayon for large inputs, and then
-    /// collapses the binary tree into 4-wide nodes. An empty input gives a tree every query
+    /// collapses the binary tree into 8-wide nodes. An empty input gives a tree every query
     /// misses. Primitives whose box is empty or contains a NaN can never be hit and are left
     /// out; coordinates beyond ±1e18 are clamped. The tree is the same for any thread count.
     pub fn build(bounds: &[Aabb]) -> Bvh {

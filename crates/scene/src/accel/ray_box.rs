@@ -1,4 +1,4 @@
-//! The slab test of one ray against the four child boxes of a wide node at once.
+//! The slab test of one ray against the child boxes of a wide node, four lanes at a time.
 //!
 //! Written with glam's `Vec4`, so that each step is one SSE instruction (`subps`, `mulps`,
 //! `maxps`, `minps`, `cmpps`); no `unsafe` intrinsics in our code.
@@ -12,7 +12,7 @@ use super::wide::{WIDTH, WideNode};
 /// never reject a box the ray touches (Ize 2013: `1 + 2γ₃`, rounded up).
 pub(super) const ROBUST_EXIT: f32 = 1.0 + 4.0 * f32::EPSILON;
 
-/// Ray data precomputed for the slab test, each component splatted over the four lanes.
+/// Ray data precomputed for the slab test, each component splatted over four lanes.
 pub(super) struct RayBox {
     /// The ray's origin, each component splatted.
     pub(super) origin: [Vec4; 3],
@@ -52,22 +52,23 @@ impl RayBox {
     /// ray counts as inside that slab, which is the correct answer for an origin on the plane.
     #[inline(always)]
     pub(super) fn entries<const OCTANT: usize>(&self, node: &WideNode, t_max: f32) -> [f32; WIDTH] {
-        let mut t_enter = Vec4::ZERO;
-        let mut t_exit = Vec4::splat(t_max);
-        for axis in 0..3 {
-            let near_corner = (OCTANT >> axis) & 1;
-            let near = Vec4::from_array(node.slabs[axis][near_corner]);
-            let far = Vec4::from_array(node.slabs[axis][near_corner ^ 1]);
-            let (origin, inverse) = (self.origin[axis], self.inverse_direction[axis]);
-            let t_near = (near - origin) * inverse;
-            let t_far = (far - origin) * inverse;
-            // Per lane `if t_near > t_enter { t_near } else { t_enter }` (one `maxps`, whose
-            // second operand wins on NaN and on equality), and the same for the exit with `<`
-            // (`minps`): a NaN plane distance is ignored. `t_enter` and `t_exit` are never NaN.
-            t_enter = t_near.max(t_enter);
-            t_exit = t_far.min(t_exit);
+        let mut out = [0.0; WIDTH];
+        for (half, out) in out.chunks_exact_mut(4).enumerate() {
+            let mut t_enter = Vec4::ZERO;
+            let mut t_exit = Vec4::splat(t_max);
+            for axis in 0..3 {
+                let near_corner = (OCTANT >> axis) & 1;
+                let near = Vec4::from_slice(&node.slabs[axis][near_corner][4 * half..]);
+                let far = Vec4::from_slice(&node.slabs[axis][near_corner ^ 1][4 * half..]);
+                let (origin, inverse) = (self.origin[axis], self.inverse_direction[axis]);
+                let t_near = (near - origin) * inverse;
+                let t_far = (far - origin) * inverse;
+                t_enter = t_near.max(t_enter);
+                t_exit = t_far.min(t_exit);
+            }
+            let hit = t_enter.cmple(t_exit * ROBUST_EXIT);
+            out.copy_from_slice(&Vec4::select(hit, t_enter, Vec4::INFINITY).to_array());
         }
-        let hit = t_enter.cmple(t_exit * ROBUST_EXIT);
-        Vec4::select(hit, t_enter, Vec4::INFINITY).to_array()
+        out
     }
 }

@@ -27,9 +27,12 @@ use crate::shape::Triangle;
 pub(super) const TRIANGLES: u32 = 1 << 31;
 
 // A leaf fits in one block.
-const _: () = assert!(super::build::MAX_LEAF_SIZE <= WIDTH);
+/// Lanes of a triangle block.
+pub(super) const LANES: usize = 4;
 
-/// Up to [`WIDTH`] triangles of one leaf: `p0[axis]` (the lanes), `edge1 = p1 − p0`,
+const _: () = assert!(super::build::MAX_LEAF_SIZE <= LANES);
+
+/// Up to [`LANES`] triangles of one leaf: `p0[axis]` (the lanes), `edge1 = p1 − p0`,
 /// `edge2 = p2 − p0`, and the primitive id of each lane. An unused lane has zero edges (its
 /// determinant is 0, so it is never hit) and id `u32::MAX`.
 #[derive(Clone, Copy, Debug)]
@@ -38,7 +41,7 @@ pub(super) struct TriangleBlock {
     p0: [Vec4; 3],
     edge1: [Vec4; 3],
     edge2: [Vec4; 3],
-    pub(super) ids: [u32; WIDTH],
+    pub(super) ids: [u32; LANES],
 }
 
 /// The ray's origin and direction, each component broadcast to the four lanes.
@@ -67,10 +70,10 @@ impl RayLanes {
 }
 
 impl TriangleBlock {
-    /// The block of `triangles` (at most [`WIDTH`], each with its primitive id), lane by lane.
+    /// The block of `triangles` (at most [`LANES`], each with its primitive id), lane by lane.
     pub(super) fn new(triangles: &[(u32, Triangle)]) -> Self {
         let zero = [Vec4::splat(0.0); 3];
-        let mut block = TriangleBlock { p0: zero, edge1: zero, edge2: zero, ids: [u32::MAX; WIDTH] };
+        let mut block = TriangleBlock { p0: zero, edge1: zero, edge2: zero, ids: [u32::MAX; LANES] };
         for (lane, (id, triangle)) in triangles.iter().enumerate() {
             let (p0, edge1, edge2) = (triangle.p0, triangle.edge1(), triangle.edge2());
             for axis in 0..3 {
@@ -128,7 +131,7 @@ pub(super) fn gather(
     for node in nodes {
         for lane in 0..WIDTH {
             let (meta, child) = (node.meta[lane], node.child[lane]);
-            if meta == 0 || meta as usize > WIDTH {
+            if meta == 0 || meta as usize > LANES {
                 continue;
             }
             let ids = if meta == 1 { std::slice::from_ref(&child) } else { &prims[child as usize..][..meta as usize] };

@@ -8,8 +8,8 @@ use super::tests::{
     Tri, intersect_triangle, mismatches, random_direction, random_rays, random_soup, random_vec, shuffled_tie_grid,
     triangle_bounds, uv_sphere,
 };
-use super::triangle_block::{RayLanes, TRIANGLES, TriangleBlock};
-use super::wide::{INTERIOR, WIDTH};
+use super::triangle_block::{LANES, RayLanes, TRIANGLES, TriangleBlock};
+use super::wide::INTERIOR;
 use super::*;
 use crate::alpha::alpha_hash;
 use crate::shape::{Sphere, Triangle};
@@ -48,7 +48,7 @@ fn check_blocks(tris: &[Tri], rays: &[(Ray, f32)]) -> usize {
 #[test]
 fn block_lanes_equal_triangle_intersect() {
     let mut rng = Rng::for_stream(21, 0, 0);
-    for count in 1..=WIDTH {
+    for count in 1..=LANES {
         for _ in 0..200 {
             let tris: Vec<(u32, Triangle)> = random_soup(&mut rng, count, 3.0)
                 .iter()

@@ -1,10 +1,10 @@
-//! The 4-wide node layout that queries traverse, and its construction by collapsing the binary
+//! The 8-wide node layout that queries traverse, and its construction by collapsing the binary
 //! SAH tree.
 //!
-//! A wide node holds the boxes of up to four children in structure-of-arrays form (one `[f32; 4]`
-//! per axis and per corner), so that one slab test handles all four lanes with SIMD arithmetic
-//! (`ray_box.rs`). Collapsing: every wide node is a binary interior node whose children are up
-//! to four of its descendants, chosen by dynamic programming so that the summed surface area of
+//! A wide node holds the boxes of up to eight children in structure-of-arrays form (one
+//! `[f32; 8]` per axis and per corner), so that the slab test handles the lanes four at a time
+//! with SIMD arithmetic (`ray_box.rs`). Collapsing: every wide node is a binary interior node
+//! whose children are up to eight of its descendants, chosen by dynamic programming so that the summed surface area of
 //! all wide nodes (the SAH's expected node visits per ray) is least ([`CollapsePlan`]).
 
 use arrayvec::ArrayVec;
@@ -12,12 +12,17 @@ use arrayvec::ArrayVec;
 use super::binary::{BinaryTree, Node};
 
 /// Number of children of a wide node.
-pub(super) const WIDTH: usize = 4;
+pub(super) const WIDTH: usize = 8;
 
 /// [`WideNode::meta`] of an interior child; its `child` is a node index.
 pub(super) const INTERIOR: u32 = u32::MAX;
 
-/// A node with up to [`WIDTH`] children; 128 bytes, two cache lines.
+/// A node with up to [`WIDTH`] children; 256 bytes, four cache lines.
+///
+/// Eight and not four children: a query's time goes mostly into the chain of dependent steps
+/// from a node to the next (load, slab test, choice of the child), and eight lanes halve the
+/// depth of the tree while their two groups of four are tested side by side. Measured against
+/// the 4-wide nodes in docs/bvh.md ("8-wide nodes").
 ///
 /// * `slabs[axis][c][lane]`: the child boxes, `c = 0` the lower corner, `c = 1` the upper one
 ///   (axis major, so that the slab test finds a ray's near and far plane of an axis at offsets
@@ -102,7 +107,7 @@ fn emit(tree: &BinaryTree, plan: &CollapsePlan, node: &Node, depth: usize, wide:
 /// pair): `cost[p][k − 1]` is the least summed area of the wide nodes inside the subtree of the
 /// node whose children are pair `p`, when that subtree may fill `k` lanes of the wide node
 /// above it: with one lane the node itself becomes a wide node (its area, plus its two
-/// children sharing four lanes); with `k ≥ 2` it may also be opened, its children sharing the
+/// children sharing all lanes); with `k ≥ 2` it may also be opened, its children sharing the
 /// `k` lanes. `split[p][k − 1]` records the choice for `k ≥ 2`: the lanes given to the left
 /// child, or 0 when the node stays closed; `split[p][0]` holds the left child's lanes inside
 /// the wide node the node becomes. (A greedy collapse, which always opened the widest interior
