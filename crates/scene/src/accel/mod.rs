@@ -9,7 +9,7 @@
 //! `docs/bvh.md`.
 //!
 //! Files: `build.rs` (binary SAH build), `binary.rs` (its node layout), `wide.rs` (8-wide nodes
-//! and the collapse), `ray_box.rs` (the 4-lane slab test), `traverse.rs` (the queries and their
+//! and the collapse), `ray_box.rs` (the slab test, four lanes at a time), `traverse.rs` (the queries and their
 //! tie rule), `triangle_block.rs` (leaves of plain triangles stored as 4-lane blocks that the
 //! queries test themselves, [`Bvh::build_with_triangles`]), `binary_traverse.rs` (the previous
 //! binary traversal, only for A/B benchmarks behind the `binary-bvh` feature, and for tests),
@@ -79,7 +79,7 @@ pub struct BvhStats {
 pub struct TraversalCounts {
     /// Nodes visited (for the wide tree one visit tests eight child boxes).
     pub nodes: u64,
-    /// Ray–box tests (four per wide node visited, two per binary interior node).
+    /// Ray–box tests (eight per wide node visited, two per binary interior node).
     pub box_tests: u64,
     /// Primitives handed to the callback.
     pub primitives: u64,

@@ -63,6 +63,10 @@ impl RayBox {
                 let (origin, inverse) = (self.origin[axis], self.inverse_direction[axis]);
                 let t_near = (near - origin) * inverse;
                 let t_far = (far - origin) * inverse;
+                // Per lane `if t_near > t_enter { t_near } else { t_enter }` (one `maxps`, whose
+                // second operand wins on NaN and on equality), and the same for the exit with
+                // `<` (`minps`): a NaN plane distance is ignored. `t_enter` and `t_exit` are
+                // never NaN.
                 t_enter = t_near.max(t_enter);
                 t_exit = t_far.min(t_exit);
             }

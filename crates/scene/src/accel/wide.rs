@@ -4,8 +4,9 @@
 //! A wide node holds the boxes of up to eight children in structure-of-arrays form (one
 //! `[f32; 8]` per axis and per corner), so that the slab test handles the lanes four at a time
 //! with SIMD arithmetic (`ray_box.rs`). Collapsing: every wide node is a binary interior node
-//! whose children are up to eight of its descendants, chosen by dynamic programming so that the summed surface area of
-//! all wide nodes (the SAH's expected node visits per ray) is least ([`CollapsePlan`]).
+//! whose children are up to eight of its descendants, chosen by dynamic programming so that the
+//! summed surface area of all wide nodes (the SAH's expected node visits per ray) is least
+//! ([`CollapsePlan`]).
 
 use arrayvec::ArrayVec;
 
