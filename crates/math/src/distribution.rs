@@ -1,9 +1,12 @@
-//! Discrete distributions sampled by inverting their cumulative sum, and the piecewise-constant
-//! 2D density built from them (environment-map importance sampling).
+//! Discrete distributions sampled by inverting their cumulative sum (and, in `alias`, by the
+//! alias method), and the piecewise-constant 2D density built from them (textured lights,
+//! projectors, goniometric lights).
 
 use glam::Vec2;
 
+mod alias;
 mod guide;
+pub use alias::AliasTable;
 use guide::Guide;
 
 /// The largest `f32` below 1: continuous samples stay in `[0, 1)`.
@@ -96,14 +99,23 @@ impl Distribution1D {
         (x, self.probability(index) * self.len() as f32, index)
     }
 
-    /// The point of [`Distribution1D::sample_continuous`] and its bin, without the density.
+    /// The bin of [`Distribution1D::sample`] for `u` and where `u` falls within that bin's
+    /// share of `[0, 1)`, as a fraction in `[0, 1]` (uniformly distributed when `u` is: a fresh
+    /// uniform number for sampling within the bin).
     #[inline]
-    fn continuous_point(&self, u: f32) -> (f32, usize) {
+    pub fn sample_remapped(&self, u: f32) -> (usize, f32) {
         let target = u * self.total;
         let index = self.guide.partition_point(&self.cdf, target).min(self.cdf.len() - 1);
         let lo = if index == 0 { 0.0 } else { self.cdf[index - 1] };
         let width = self.cdf[index] - lo;
         let offset = if width > 0.0 { ((target - lo) / width).clamp(0.0, 1.0) } else { 0.5 };
+        (index, offset)
+    }
+
+    /// The point of [`Distribution1D::sample_continuous`] and its bin, without the density.
+    #[inline]
+    fn continuous_point(&self, u: f32) -> (f32, usize) {
+        let (index, offset) = self.sample_remapped(u);
         let n = self.len();
         // Through `i64`: the same exact values as from `usize` (both below 2^53), one
         // instruction each instead of an unsigned conversion's several.

@@ -15,7 +15,7 @@ pub mod special;
 pub mod warp;
 
 pub use bounds::Aabb;
-pub use distribution::{Distribution1D, Distribution2D};
+pub use distribution::{AliasTable, Distribution1D, Distribution2D};
 pub use frame::Frame;
 pub use glam::{Vec2, Vec3, Vec3A};
 pub use pdf::{PdfA, PdfW};

@@ -120,6 +120,58 @@ pub fn uniform_triangle_inverse(b: Vec2) -> [f32; 2] {
     [s * s, if s > 0.0 { b.y / s } else { 0.0 }]
 }
 
+/// A point of `[0, 1]` with density proportional to `(1 − x)·v0 + x·v1` (`v0, v1 ≥ 0`, not both
+/// zero; `u` itself when both are zero). The density per unit length is
+/// [`linear_pdf`]`(x, v0, v1)`; the map inverts the cumulative distribution
+/// `F(x) = (v0·x + (v1 − v0)·x²/2) / ((v0 + v1)/2)` in a form without cancellation.
+#[inline]
+pub fn linear(u: f32, v0: f32, v1: f32) -> f32 {
+    let sum = v0 + v1;
+    if sum.is_nan() || sum <= 0.0 || v0 == v1 {
+        return u;
+    }
+    // Roots of F(x) = u: x = u·(v0 + v1) / (v0 + √((1 − u)·v0² + u·v1²)).
+    // The denominator is zero only for v0 = 0 and u = 0, whose root is x = 0.
+    let denominator = v0 + ((1.0 - u) * v0 * v0 + u * v1 * v1).sqrt();
+    if denominator > 0.0 { (u * sum / denominator).clamp(0.0, 1.0) } else { 0.0 }
+}
+
+/// Density per unit length of [`linear`] at `x ∈ [0, 1]`: `2·((1 − x)·v0 + x·v1) / (v0 + v1)`
+/// (1 when both are zero).
+#[inline]
+pub fn linear_pdf(x: f32, v0: f32, v1: f32) -> f32 {
+    let sum = v0 + v1;
+    if sum.is_nan() || sum <= 0.0 {
+        return 1.0;
+    }
+    2.0 * ((1.0 - x) * v0 + x * v1) / sum
+}
+
+/// A point of the unit square with density proportional to the bilinear interpolation of the
+/// non-negative corner values `w = [w(0,0), w(1,0), w(0,1), w(1,1)]` (`w(x, y)`): `y` from its
+/// marginal (linear between the mean of the `y = 0` corners and that of the `y = 1` corners),
+/// then `x` from the conditional at that `y` (linear). Density per unit area:
+/// [`bilinear_pdf`]. Uniform when all corners are zero.
+#[inline]
+pub fn bilinear(u: [f32; 2], w: [f32; 4]) -> Vec2 {
+    let y = linear(u[1], w[0] + w[1], w[2] + w[3]);
+    let x = linear(u[0], (1.0 - y) * w[0] + y * w[2], (1.0 - y) * w[1] + y * w[3]);
+    Vec2::new(x, y)
+}
+
+/// Density per unit area of [`bilinear`] at `p ∈ [0, 1]²`: the bilinear interpolation of `w` at
+/// `p` divided by the mean of the corners (1 when all are zero).
+#[inline]
+pub fn bilinear_pdf(p: Vec2, w: [f32; 4]) -> f32 {
+    let sum = w[0] + w[1] + w[2] + w[3];
+    if sum.is_nan() || sum <= 0.0 {
+        return 1.0;
+    }
+    let top = (1.0 - p.x) * w[0] + p.x * w[1];
+    let bottom = (1.0 - p.x) * w[2] + p.x * w[3];
+    4.0 * ((1.0 - p.y) * top + p.y * bottom) / sum
+}
+
 /// The azimuth of `d` as a fraction of a full turn, in `[0, 1)`.
 #[inline]
 fn azimuth_fraction(d: Vec3) -> f32 {
@@ -141,6 +193,65 @@ mod tests {
 
     fn close(a: [f32; 2], b: [f32; 2]) -> bool {
         (a[0] - b[0]).abs() < 2e-4 && (a[1] - b[1]).abs() < 2e-4
+    }
+
+    #[test]
+    fn linear_inverts_its_cumulative_distribution() {
+        // F(x(u)) = u for the closed-form F of the documentation, including one zero end.
+        for (v0, v1) in [(1.0f32, 3.0f32), (3.0, 1.0), (0.0, 2.0), (2.0, 0.0), (1e-6, 5.0), (2.0, 2.0)] {
+            for i in 0..=100 {
+                let u = i as f32 / 100.0;
+                let x = linear(u, v0, v1);
+                assert!((0.0..=1.0).contains(&x), "{x}");
+                let f = (v0 * x + (v1 - v0) * x * x / 2.0) / ((v0 + v1) / 2.0);
+                assert!((f - u).abs() < 2e-6, "v = ({v0}, {v1}), u = {u}: F(x) = {f}");
+            }
+        }
+        assert_eq!(linear(0.3, 0.0, 0.0), 0.3);
+        assert_eq!(linear_pdf(0.3, 0.0, 0.0), 1.0);
+        assert!((linear_pdf(0.25, 1.0, 3.0) - 2.0 * 1.5 / 4.0).abs() < 1e-6);
+    }
+
+    /// Chi-square of 200k [`bilinear`] points for the corners `sampled` in a 10 × 10 histogram
+    /// against the integral of [`bilinear_pdf`] for the corners `expected` over each bin
+    /// (midpoint rule on a 20 × 20 sub-grid: exact for a bilinear function).
+    fn bilinear_chi2(sampled: [f32; 4], expected: [f32; 4]) -> f64 {
+        let mut rng = crate::Rng::new(7, 11);
+        let n = 200_000;
+        let mut counts = [0u32; 100];
+        for _ in 0..n {
+            let p = bilinear(rng.uniform2(), sampled);
+            assert!((0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y), "{p}");
+            let (i, j) = (((p.x * 10.0) as usize).min(9), ((p.y * 10.0) as usize).min(9));
+            counts[j * 10 + i] += 1;
+        }
+        let mut chi2 = 0.0f64;
+        for (k, observed) in counts.iter().enumerate() {
+            let (i, j) = (k % 10, k / 10);
+            let mut integral = 0.0f64;
+            for a in 0..20 {
+                for b in 0..20 {
+                    let x = (i as f32 + (a as f32 + 0.5) / 20.0) / 10.0;
+                    let y = (j as f32 + (b as f32 + 0.5) / 20.0) / 10.0;
+                    integral += bilinear_pdf(Vec2::new(x, y), expected) as f64 / 40_000.0;
+                }
+            }
+            let expected = integral * n as f64;
+            chi2 += (*observed as f64 - expected).powi(2) / expected.max(1e-9);
+        }
+        chi2
+    }
+
+    #[test]
+    fn bilinear_matches_its_density_by_chi_square() {
+        // Chi-square with 99 degrees of freedom: about 157 at p = 1e-4.
+        for w in [[1.0f32, 4.0, 0.5, 2.0], [0.0, 0.0, 1.0, 3.0], [5.0, 0.0, 0.0, 1.0], [0.0; 4]] {
+            let chi2 = bilinear_chi2(w, w);
+            assert!(chi2 < 157.0, "w = {w:?}: chi-square {chi2}");
+        }
+        // Power: corners off by 10 % at one corner are detected.
+        let chi2 = bilinear_chi2([1.0, 4.0, 0.5, 2.0], [1.0, 4.0, 0.5, 2.2]);
+        assert!(chi2 > 157.0, "a 10 % error at one corner passed: chi-square {chi2}");
     }
 
     #[test]

@@ -642,7 +642,18 @@ fn envmap_pdf_is_positive_wherever_radiance_is_and_integrates_to_one() {
         to_world: env_rotation(),
     })
     .unwrap();
-    for (name, l) in [("gradient", env_light()), ("sparse", sparse)] {
+    // Lit on the top (pole) row and one pixel of row 3: a density from luminance × sin θ at the
+    // pixel rows would be 0 on the whole first row of cells, where the radiance is not.
+    let mut pixels = vec![Rgb::BLACK; (w * h) as usize];
+    pixels[..w as usize].iter_mut().for_each(|p| *p = Rgb::new(1.0, 2.0, 0.5));
+    pixels[(3 * w + 4) as usize] = Rgb::new(2.0, 1.0, 1.0);
+    let pole = Light::from_desc(&LightDesc::EnvMap {
+        image: Arc::new(TextureImage { width: w, height: h, pixels }),
+        scale: 1.0,
+        to_world: env_rotation(),
+    })
+    .unwrap();
+    for (name, l) in [("gradient", env_light()), ("sparse", sparse), ("pole", pole)] {
         let Light::EnvMap(env) = &l else { unreachable!() };
         let mut lit = 0;
         let mut rng = Rng::for_stream(4, 5, 6);

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use math::{Distribution2D, Frame, PI, PdfA, PdfW, Vec3};
+use math::{AliasTable, Distribution1D, Frame, PI, PdfA, PdfW, Vec3, warp};
 use spectrum::Rgb;
 
 use super::{BoundingSphere, DirectSample, EmissionSample, HitRadiance, disc_origin, disc_pdf};
@@ -16,40 +16,51 @@ use crate::desc::TextureImage;
 /// at `u = (x + ½)/W` (periodic in `u`) and `v = y/(H − 1)` (row 0 at the north pole `v.y = 1`,
 /// row `H − 1` at the south pole).
 ///
-/// Sampling: a piecewise-constant density over the `W × (H − 1)` cells of that grid, each cell
-/// weighted by the exact integral of the luminance of its bilinear radiance over its solid
-/// angle, so the density is positive wherever the radiance can be. A point `(s, t)` of the unit
-/// square has density `p(s, t)` per unit area and the direction it maps to has density
+/// Sampling (as Mitsuba 3 does, with its own construction here): the density over the
+/// sampling square `(s, t)` is the bilinear interpolation of the lattice values
+/// `w = luminance × sin θ` (θ of the pixel's row), normalised — so that per steradian it follows
+/// the bilinear radiance's luminance within each cell instead of being constant over the cell.
+/// A cell is picked in proportion to the mean of its four corners (the integral of the bilinear
+/// density over it), then a point within it from the bilinear density ([`math::warp::bilinear`]).
+/// The density is positive wherever the radiance is (on the pole rows `sin θ` is taken a
+/// quarter row from the pole, so a lit pole row beside a black one keeps a density). A
+/// point `(s, t)` with density `p(s, t)` per unit area maps to a direction with density
 /// `p / (2π² sin θ)` per steradian.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EnvMapLight {
     data: Arc<EnvMapData>,
 }
 
-/// One pixel of the map and the sampling density of the lattice cell whose upper-left corner it
-/// is, side by side: [`EnvMapLight::evaluate`] reads the corner pixel anyway, so the density
-/// comes with it in the same cache line (16 bytes, aligned: a texel never straddles two).
+/// One pixel of the map and the sampling density at its lattice point, side by side:
+/// [`EnvMapLight::evaluate`] interpolates both from the same four pixels (16 bytes, aligned: a
+/// texel never straddles two cache lines).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(align(16))]
 struct Texel {
     /// The pixel with the scale applied; negatives clamped to 0.
     radiance: Rgb,
-    /// Density per unit area of the sampling square on the cell `(x, y)` of this pixel
-    /// ([`Distribution2D::cell_pdf`]); 0 on the last row, which starts no cell.
-    cell_pdf: f32,
+    /// Density per unit area of the sampling square at this lattice point: `w / Z` with
+    /// `w = luminance × sin θ` and `Z` the integral of the bilinear `w` over the square (1
+    /// everywhere for a black map, which is sampled uniformly).
+    density: f32,
 }
 
 #[derive(Debug, PartialEq)]
 struct EnvMapData {
     width: usize,
     height: usize,
-    /// The `W × H` pixels row-major, row 0 at the top, each with its cell's density: the
-    /// lookup cell of a point is its sampling cell, so one read replaces recomputing the
-    /// density from the cumulative sums.
+    /// The `W × H` pixels row-major, row 0 at the top, each with the sampling density at its
+    /// lattice point.
     texels: Vec<Texel>,
     /// Rotation local → world (columns: images of the local axes).
     to_world: [Vec3; 3],
-    distribution: Distribution2D,
+    /// Picks a row of lattice cells in proportion to the integral of the bilinear density over
+    /// it (255 entries for a 512 × 256 map: small enough to stay in cache, so inverted).
+    rows: Distribution1D,
+    /// For each row of cells, picks a cell in proportion to the integral of the density over
+    /// it: one table read per sample (the cumulative sums and their guide were two reads from
+    /// memory that is not in cache, measured 9 % of a matpreview render).
+    columns: Vec<AliasTable>,
     /// `½/W`: the offset between the map's `u` and the sampling square's `s`.
     half_texel: f32,
     /// `W` as `f32` (lattice columns per unit of `s`).
@@ -100,14 +111,14 @@ impl EnvMapLight {
         }
         let pixels: Vec<Rgb> = image.pixels.iter().map(|p| (*p * scale).max(Rgb::BLACK)).collect();
 
-        // Exact integral of the luminance of the bilinear radiance over each cell's solid
-        // angle. Across a cell the radiance averaged over u is linear in θ, from `a` (upper
-        // row) to `b` (lower row); ∫ (a + (b−a)t) sin(θ0 + tΔ) Δ dt = a·k_a + b·k_b.
+        // Exact integral of the luminance of the bilinear radiance over the sphere (the
+        // light's power for light selection). Across a cell the radiance averaged over u is
+        // linear in θ, from `a` (upper row) to `b` (lower row); ∫ (a + (b−a)t) sin(θ0 + tΔ) Δ dt
+        // = a·k_a + b·k_b.
         let cells_y = height - 1;
         let delta = std::f64::consts::PI / cells_y as f64;
         let cell_phi = 2.0 * std::f64::consts::PI / width as f64;
         let lum = |x: usize, y: usize| pixels[y * width + x].luminance().max(0.0) as f64;
-        let mut weights = Vec::with_capacity(width * cells_y);
         let mut integral = 0.0f64;
         for j in 0..cells_y {
             let (theta0, theta1) = (j as f64 * delta, (j + 1) as f64 * delta);
@@ -117,21 +128,47 @@ impl EnvMapLight {
                 let i1 = (i + 1) % width;
                 let a = 0.5 * (lum(i, j) + lum(i1, j));
                 let b = 0.5 * (lum(i, j + 1) + lum(i1, j + 1));
-                let w = cell_phi * (a * k_a + b * k_b);
-                integral += w;
-                weights.push(w as f32);
+                integral += cell_phi * (a * k_a + b * k_b);
             }
         }
-        // A black map emits nothing; sample it uniformly in the square so that the pdfs stay
-        // valid.
-        let distribution = Distribution2D::new(&weights, width, cells_y)
-            .or_else(|| Distribution2D::new(&vec![1.0; width * cells_y], width, cells_y))
+        // The sampling density's lattice values w = luminance × sin θ, and each cell's weight,
+        // the mean of its corners (the integral of the bilinear w over the cell, per unit of
+        // cell area). On the pole rows sin θ = 0 would leave no density where the radiance
+        // there is positive and the next row black (a bias), so θ is taken at least a quarter
+        // row away from the poles. A black map gets w = 1 everywhere (uniform in the square) so
+        // that the densities stay valid.
+        let row_sin = |j: usize| (j as f64 * delta).clamp(0.25 * delta, std::f64::consts::PI - 0.25 * delta).sin();
+        let mut lattice: Vec<f64> =
+            (0..width * height).map(|k| lum(k % width, k / width) * row_sin(k / width)).collect();
+        let cell_weights = |lattice: &[f64]| -> Vec<f64> {
+            let at = |i: usize, j: usize| lattice[j * width + i % width];
+            (0..cells_y)
+                .flat_map(|j| (0..width).map(move |i| (i, j)))
+                .map(|(i, j)| 0.25 * (at(i, j) + at(i + 1, j) + at(i, j + 1) + at(i + 1, j + 1)))
+                .collect()
+        };
+        let mut weights = cell_weights(&lattice);
+        if !weights.iter().any(|w| *w > 0.0) {
+            lattice.iter_mut().for_each(|w| *w = 1.0);
+            weights = cell_weights(&lattice);
+        }
+        // Z = ∫ bilinear(w) ds dt over the square = the mean cell weight.
+        let z = weights.iter().sum::<f64>() / weights.len() as f64;
+        let weights: Vec<f32> = weights.iter().map(|w| *w as f32).collect();
+        let row_sums: Vec<f32> =
+            weights.chunks_exact(width).map(|row| row.iter().map(|w| *w as f64).sum::<f64>() as f32).collect();
+        let rows = Distribution1D::new(&row_sums)
             .ok_or_else(|| "environment map: cannot build the sampling distribution".to_string())?;
-        let cell_pdfs = distribution.cell_pdfs();
+        // A row without weight is never picked; it gets a uniform table so that every row has one.
+        let columns = weights
+            .chunks_exact(width)
+            .map(|row| AliasTable::new(row).or_else(|| AliasTable::new(&vec![1.0; width])))
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(|| "environment map: cannot build the sampling distribution".to_string())?;
         let texels = pixels
             .iter()
-            .enumerate()
-            .map(|(i, radiance)| Texel { radiance: *radiance, cell_pdf: cell_pdfs.get(i).copied().unwrap_or(0.0) })
+            .zip(&lattice)
+            .map(|(radiance, w)| Texel { radiance: *radiance, density: (w / z) as f32 })
             .collect();
         Ok(Self {
             data: Arc::new(EnvMapData {
@@ -139,7 +176,8 @@ impl EnvMapLight {
                 height,
                 texels,
                 to_world,
-                distribution,
+                rows,
+                columns,
                 half_texel: 0.5 / width as f32,
                 width_f32: width as f32,
                 cells_y_f32: cells_y as f32,
@@ -162,10 +200,9 @@ impl EnvMapLight {
     /// Radiance from `direction` and its density per steradian, both looked up at the same
     /// point of the map.
     ///
-    /// The radiance is the bilinear interpolation at the sampling-square point `(s, t)`
-    /// (lattice coordinates `s·W`, periodic, and `t·(H − 1)`); the lattice cell it interpolates
-    /// in is the sampling cell of `(s, t)`, whose density `p` per unit area
-    /// ([`Distribution2D::pdf`]) is stored with the cell's upper-left pixel.
+    /// The radiance and the density `p` per unit area of the sampling square are both the
+    /// bilinear interpolations at the sampling-square point `(s, t)` (lattice coordinates
+    /// `s·W`, periodic, and `t·(H − 1)`) of the four surrounding texels.
     #[inline]
     fn evaluate(&self, direction: Vec3) -> (Rgb, f32) {
         let d = &*self.data;
@@ -183,14 +220,16 @@ impl EnvMapLight {
         let j0 = (y.max(0.0) as u32).min(d.height as u32 - 2) as usize;
         let fy = (y - j0 as f32).clamp(0.0, 1.0);
         let (top_row, bottom_row) = (&d.texels[j0 * d.width..], &d.texels[(j0 + 1) * d.width..]);
-        let corner = top_row[i0];
-        let top = corner.radiance * (1.0 - fx) + top_row[i1].radiance * fx;
-        let bottom = bottom_row[i0].radiance * (1.0 - fx) + bottom_row[i1].radiance * fx;
+        let [a, b, c, e] = [top_row[i0], top_row[i1], bottom_row[i0], bottom_row[i1]];
+        let top = a.radiance * (1.0 - fx) + b.radiance * fx;
+        let bottom = c.radiance * (1.0 - fx) + e.radiance * fx;
         let radiance = top * (1.0 - fy) + bottom * fy;
         let pdf = if sin_theta > 0.0 {
-            // Distribution2D::pdf: 0 outside the closed unit square (NaN included).
+            // 0 outside the closed unit square (NaN included).
             let inside = (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t);
-            let pdf_area = if inside { corner.cell_pdf } else { 0.0 };
+            let top = a.density * (1.0 - fx) + b.density * fx;
+            let bottom = c.density * (1.0 - fx) + e.density * fx;
+            let pdf_area = if inside { top * (1.0 - fy) + bottom * fy } else { 0.0 };
             pdf_area / (2.0 * PI * PI * sin_theta)
         } else {
             0.0
@@ -204,23 +243,43 @@ impl EnvMapLight {
     }
 
     /// Samples a direction towards the environment: the unit world direction, its radiance and
-    /// its density per steradian. Both are evaluated from the direction (as
-    /// [`Light::radiance_on_hit`] does), so the two queries agree exactly. `None` when nothing
-    /// is emitted from the sampled direction (or at the poles, where the density is singular).
+    /// its density per steradian, both interpolated at the sampled point from the same four
+    /// texels that [`EnvMapLight::evaluate`] (and so [`Light::radiance_on_hit`]) reads for that
+    /// direction. Both are continuous, so the two queries agree to rounding (the direction's
+    /// round trip through `atan2`/`acos`), and this skips that round trip. `None` when nothing is
+    /// emitted from the sampled point (or at the poles, where the density is singular).
     fn sample(&self, u: [f32; 2]) -> Option<(Vec3, Rgb, f32)> {
-        let p = self.data.distribution.sample_point(u);
-        let theta = p.y * PI;
-        let mut u_map = p.x + self.data.half_texel;
+        let d = &*self.data;
+        let (j0, v) = d.rows.sample_remapped(u[1]);
+        let (i0, w) = d.columns[j0].sample_remapped(u[0]);
+        let within = [w, v];
+        let i1 = if i0 + 1 == d.width { 0 } else { i0 + 1 };
+        let (top_row, bottom_row) = (&d.texels[j0 * d.width..], &d.texels[(j0 + 1) * d.width..]);
+        let [a, b, c, e] = [top_row[i0], top_row[i1], bottom_row[i0], bottom_row[i1]];
+        let f = warp::bilinear(within, [a.density, b.density, c.density, e.density]);
+        let (fx, fy) = (f.x, f.y);
+        let (s, t) = ((i0 as f32 + fx) / d.width_f32, (j0 as f32 + fy) / d.cells_y_f32);
+        let theta = t.min(1.0) * PI;
+        let mut u_map = s + d.half_texel;
         if u_map >= 1.0 {
             u_map -= 1.0;
         }
         let phi = 2.0 * PI * u_map;
         let (sin_theta, cos_theta) = theta.sin_cos();
+        if sin_theta.is_nan() || sin_theta <= 0.0 {
+            return None;
+        }
         let (sin_phi, cos_phi) = phi.sin_cos();
         let local = Vec3::new(sin_phi * sin_theta, cos_theta, -cos_phi * sin_theta);
-        let [c0, c1, c2] = self.data.to_world;
+        let [c0, c1, c2] = d.to_world;
         let direction = (c0 * local.x + c1 * local.y + c2 * local.z).normalize();
-        let (radiance, pdf) = self.evaluate(direction);
+        // The same interpolation as `evaluate`, at the sampled point of the cell.
+        let top = a.radiance * (1.0 - fx) + b.radiance * fx;
+        let bottom = c.radiance * (1.0 - fx) + e.radiance * fx;
+        let radiance = top * (1.0 - fy) + bottom * fy;
+        let top = a.density * (1.0 - fx) + b.density * fx;
+        let bottom = c.density * (1.0 - fx) + e.density * fx;
+        let pdf = (top * (1.0 - fy) + bottom * fy) / (2.0 * PI * PI * sin_theta);
         (pdf > 0.0 && !radiance.is_black()).then_some((direction, radiance, pdf))
     }
 
@@ -317,7 +376,7 @@ impl EnvMapLight {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use math::{Rng, Vec2};
+    use math::Rng;
 
     /// A small map with a black region, a bright spot and a seam that differs across `u = 0`.
     fn test_light(width: u32, height: u32, to_world: [Vec3; 3]) -> EnvMapLight {
@@ -334,8 +393,8 @@ mod tests {
         EnvMapLight::new(&TextureImage { width, height, pixels }, 1.5, to_world).unwrap()
     }
 
-    /// `evaluate` as it was written before the per-light constants and the density table: the
-    /// density from `Distribution2D::pdf` and the radiance from a separate bilinear lookup.
+    /// `evaluate` written plainly (library `floor`, `usize` conversions, modular wrap): the
+    /// radiance and the density each from its own bilinear lookup.
     fn evaluate_reference(light: &EnvMapLight, direction: Vec3) -> (Rgb, f32) {
         let d = &*light.data;
         let local = light.to_local(direction);
@@ -355,7 +414,11 @@ mod tests {
         let top = px(i0, j0) * (1.0 - fx) + px(i1, j0) * fx;
         let bottom = px(i0, j0 + 1) * (1.0 - fx) + px(i1, j0 + 1) * fx;
         let radiance = top * (1.0 - fy) + bottom * fy;
-        let pdf = if sin_theta > 0.0 { d.distribution.pdf(Vec2::new(s, t)) / (2.0 * PI * PI * sin_theta) } else { 0.0 };
+        let w = |i: usize, j: usize| d.texels[j * d.width + i].density;
+        let top = w(i0, j0) * (1.0 - fx) + w(i1, j0) * fx;
+        let bottom = w(i0, j0 + 1) * (1.0 - fx) + w(i1, j0 + 1) * fx;
+        let density = top * (1.0 - fy) + bottom * fy;
+        let pdf = if sin_theta > 0.0 { density / (2.0 * PI * PI * sin_theta) } else { 0.0 };
         (radiance, pdf)
     }
 
@@ -386,6 +449,32 @@ mod tests {
                 let world = to_world[0] * direction.x + to_world[1] * direction.y + to_world[2] * direction.z;
                 for v in [direction, world] {
                     assert!(same_bits(light.evaluate(v), evaluate_reference(&light, v)), "{v}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_sample_reports_what_evaluate_finds_for_its_direction() {
+        // `sample` interpolates at the sampled point instead of re-deriving it from the
+        // direction: the two agree to rounding, relative 1e-4 plus the conditioning of
+        // `evaluate`'s lookup near a pole: acos(y) moves by ε / sin θ for a rounding ε of y, and
+        // the density and radiance there vary like θ (and with the ill-defined azimuth), so
+        // relatively by about ε / sin² θ.
+        let (c, s) = (0.6f32.cos(), 0.6f32.sin());
+        let rotation = [Vec3::new(c, 0.0, -s), Vec3::Y, Vec3::new(s, 0.0, c)];
+        let mut rng = Rng::new(9, 4);
+        for (w, h) in [(8, 5), (1, 2), (7, 16), (64, 32)] {
+            let light = test_light(w, h, rotation);
+            for _ in 0..20_000 {
+                let Some((direction, radiance, pdf)) = light.sample(rng.uniform2()) else { continue };
+                let (r, p) = light.evaluate(direction);
+                let close = |a: f32, b: f32, tolerance: f32| (a - b).abs() <= tolerance * a.abs().max(b.abs()) + 1e-6;
+                let local = light.to_local(direction);
+                let tolerance = 1e-4 + 2e-7 / (local.x * local.x + local.z * local.z);
+                assert!(close(pdf, p, tolerance), "{w}×{h}: pdf {pdf} vs {p} at {direction}");
+                for (a, b) in [(radiance.r, r.r), (radiance.g, r.g), (radiance.b, r.b)] {
+                    assert!(close(a, b, tolerance), "{w}×{h}: radiance {radiance:?} vs {r:?} at {direction}");
                 }
             }
         }
