@@ -332,11 +332,15 @@ fn radiance<S: SpectralMode>(
             }
         }
 
-        // Continue by BSDF sampling, with Russian roulette.
-        let Some(sample) = bsdf.sample(rng.uniform3()) else { break };
+        // Continue by BSDF sampling, with Russian roulette. The roulette is decided before the
+        // BSDF is sampled (a stopped path does not pay for the sample), with the numbers drawn
+        // in the order of sampling first: the path's stream ends with the path, so the images
+        // are the same as when the sample came first.
+        let u_sample = rng.uniform3();
         if continuation < 1.0 && rng.uniform() >= continuation {
             break;
         }
+        let Some(sample) = bsdf.sample(u_sample) else { break };
         let pdf = sample.pdf.forward.0 * continuation;
         match &fluorescent {
             None => throughput *= view(&slots, S::from_reflectance(w, sample.value)) * (sample.cos_generated / pdf),

@@ -74,17 +74,18 @@ impl<S: SpectralMode> SubPath<S> {
         camera: bool,
         presampled: Option<BsdfSample>,
     ) -> Option<Scattered> {
-        let sample = match presampled {
-            Some(sample) => sample,
-            None => {
-                let u = rng.uniform3();
-                if specular_only { bsdf.sample_specular(u) } else { bsdf.sample(u) }?
-            }
-        };
+        // Russian roulette before the BSDF is sampled (a stopped walk does not pay for the
+        // sample), with the numbers drawn in the order of sampling first: a sub-path's stream
+        // ends with the walk, so the images are the same as when the sample came first.
+        let u = if presampled.is_none() { rng.uniform3() } else { [0.0; 3] };
         let continuation = bsdf.continuation_probability();
         if continuation < 1.0 && rng.uniform() >= continuation {
             return None;
         }
+        let sample = match presampled {
+            Some(sample) => sample,
+            None => if specular_only { bsdf.sample_specular(u) } else { bsdf.sample(u) }?,
+        };
         let specular = sample.lobe.is_specular();
         let forward = sample.pdf.forward.0 * continuation;
         let reverse = sample.pdf.reverse.0 * continuation;
