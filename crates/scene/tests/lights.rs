@@ -632,27 +632,21 @@ fn integrate_over_sphere(f: impl Fn(Vec3) -> f64, n_theta: usize) -> f64 {
 #[test]
 fn envmap_pdf_is_positive_wherever_radiance_is_and_integrates_to_one() {
     let s = sphere();
-    // A sparse map (one bright pixel) is where a pixel-based pdf would miss the bilinear tails.
     let (w, h) = (10u32, 6u32);
+    let map = |pixels: Vec<Rgb>| {
+        let image = Arc::new(TextureImage { width: w, height: h, pixels });
+        Light::from_desc(&LightDesc::EnvMap { image, scale: 1.0, to_world: env_rotation() }).unwrap()
+    };
+    // A sparse map (one bright pixel) is where a pixel-based pdf would miss the bilinear tails.
     let mut pixels = vec![Rgb::BLACK; (w * h) as usize];
     pixels[(2 * w + 9) as usize] = Rgb::new(0.0, 0.0, 3.0);
-    let sparse = Light::from_desc(&LightDesc::EnvMap {
-        image: Arc::new(TextureImage { width: w, height: h, pixels }),
-        scale: 1.0,
-        to_world: env_rotation(),
-    })
-    .unwrap();
+    let sparse = map(pixels);
     // Lit on the top (pole) row and one pixel of row 3: a density from luminance × sin θ at the
     // pixel rows would be 0 on the whole first row of cells, where the radiance is not.
     let mut pixels = vec![Rgb::BLACK; (w * h) as usize];
     pixels[..w as usize].iter_mut().for_each(|p| *p = Rgb::new(1.0, 2.0, 0.5));
     pixels[(3 * w + 4) as usize] = Rgb::new(2.0, 1.0, 1.0);
-    let pole = Light::from_desc(&LightDesc::EnvMap {
-        image: Arc::new(TextureImage { width: w, height: h, pixels }),
-        scale: 1.0,
-        to_world: env_rotation(),
-    })
-    .unwrap();
+    let pole = map(pixels);
     for (name, l) in [("gradient", env_light()), ("sparse", sparse), ("pole", pole)] {
         let Light::EnvMap(env) = &l else { unreachable!() };
         let mut lit = 0;
