@@ -217,32 +217,12 @@ impl Distribution2D {
         (Vec2::new(x, y), pdf_x * pdf_y)
     }
 
-    /// The point of [`Distribution2D::sample`] for the same `u`, without its density.
-    #[inline]
-    pub fn sample_point(&self, u: [f32; 2]) -> Vec2 {
-        let (y, row) = self.marginal.continuous_point(u[1]);
-        let (x, _) = self.conditional[row].continuous_point(u[0]);
-        Vec2::new(x, y)
-    }
-
     /// Density per unit area of [`Distribution2D::sample`] at `p ∈ [0, 1]²` (0 outside).
     pub fn pdf(&self, p: Vec2) -> f32 {
         if !(0.0..=1.0).contains(&p.x) || !(0.0..=1.0).contains(&p.y) {
             return 0.0;
         }
         self.cell_pdf(bin_of(p.x, self.width()), bin_of(p.y, self.height()))
-    }
-
-    /// [`Distribution2D::cell_pdf`] of every cell, row-major (row `y`, column `x` at
-    /// `y·width + x`): densities per unit area.
-    pub fn cell_pdfs(&self) -> Vec<f32> {
-        let mut pdfs = Vec::with_capacity(self.width() * self.height());
-        for (y, row) in self.conditional.iter().enumerate() {
-            // The same product as `cell_pdf`, with the row's factor computed once.
-            let row_density = self.marginal.bin_density(y);
-            pdfs.extend((0..row.len()).map(|x| row_density * row.bin_density(x)));
-        }
-        pdfs
     }
 
     /// Density per unit area of [`Distribution2D::sample`] on the cell in column `x` and row
@@ -362,19 +342,6 @@ mod tests {
     }
 
     #[test]
-    fn sample_point_is_the_point_of_sample() {
-        let d = Distribution2D::new(&WEIGHTS, 5, 4).unwrap();
-        let mut rng = crate::Rng::new(5, 6);
-        let mut us: Vec<[f32; 2]> = (0..20_000).map(|_| rng.uniform2()).collect();
-        us.extend([[0.0, 0.0], [ONE_MINUS_EPSILON, ONE_MINUS_EPSILON], [0.5, 0.0], [0.0, 0.5]]);
-        for u in us {
-            let (p, _) = d.sample(u);
-            let q = d.sample_point(u);
-            assert_eq!((p.x.to_bits(), p.y.to_bits()), (q.x.to_bits(), q.y.to_bits()), "{u:?}");
-        }
-    }
-
-    #[test]
     fn bins_agree_with_the_usize_conversion() {
         for n in [1usize, 2, 3, 7, 255, 1000, 4097] {
             let mut xs = vec![0.0, -0.0, 1.0, ONE_MINUS_EPSILON, -1.0, 2.0, f32::NAN, f32::INFINITY];
@@ -402,11 +369,6 @@ mod tests {
                     assert_eq!(d.pdf(p).to_bits(), expected.to_bits(), "{p}");
                 }
             }
-        }
-        let all = d.cell_pdfs();
-        assert_eq!(all.len(), w * h);
-        for (i, pdf) in all.iter().enumerate() {
-            assert_eq!(pdf.to_bits(), d.cell_pdf(i % w, i / w).to_bits());
         }
         assert_eq!(d.cell_pdf(w, 0), 0.0);
         assert_eq!(d.cell_pdf(0, h), 0.0);

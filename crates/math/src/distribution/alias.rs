@@ -22,8 +22,6 @@ struct Slot {
 #[derive(Clone, Debug, PartialEq)]
 pub struct AliasTable {
     slots: Vec<Slot>,
-    /// `w_i / Σ w` for each entry.
-    probabilities: Vec<f32>,
 }
 
 impl AliasTable {
@@ -53,8 +51,7 @@ impl AliasTable {
             }
         }
         // What is left is full up to rounding: those slots keep threshold 1 (their own entry).
-        let probabilities = weights.iter().map(|w| (*w as f64 / total) as f32).collect();
-        Some(Self { slots, probabilities })
+        Some(Self { slots })
     }
 
     /// Number of entries.
@@ -65,12 +62,6 @@ impl AliasTable {
     /// Always false: an empty table cannot be built.
     pub fn is_empty(&self) -> bool {
         self.slots.is_empty()
-    }
-
-    /// Probability of entry `i` (`w_i / Σ w`).
-    #[inline]
-    pub fn probability(&self, i: usize) -> f32 {
-        self.probabilities[i]
     }
 
     /// Picks an entry for the uniform number `u ∈ [0, 1)` and returns it with a fresh uniform
@@ -142,9 +133,6 @@ mod tests {
         for (weights, critical) in [(vec![1.0f32, 0.0, 3.0], 18.4), (random, 90.0), (vec![2.0; 7], 35.0)] {
             let table = AliasTable::new(&weights).unwrap();
             let expected = normalised(&weights);
-            for (i, p) in expected.iter().enumerate() {
-                assert!((table.probability(i) as f64 - p).abs() < 1e-6);
-            }
             let c = chi2(&table, &expected, 200_000);
             assert!(c < critical, "{weights:?}: chi-square {c}");
         }

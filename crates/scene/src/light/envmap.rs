@@ -215,21 +215,14 @@ impl EnvMapLight {
         let x = s * d.width_f32;
         let i0 = (x.max(0.0) as u32).min(d.width as u32 - 1) as usize;
         let fx = (x - i0 as f32).clamp(0.0, 1.0);
-        let i1 = if i0 + 1 == d.width { 0 } else { i0 + 1 };
         let y = t * d.cells_y_f32;
         let j0 = (y.max(0.0) as u32).min(d.height as u32 - 2) as usize;
         let fy = (y - j0 as f32).clamp(0.0, 1.0);
-        let (top_row, bottom_row) = (&d.texels[j0 * d.width..], &d.texels[(j0 + 1) * d.width..]);
-        let [a, b, c, e] = [top_row[i0], top_row[i1], bottom_row[i0], bottom_row[i1]];
-        let top = a.radiance * (1.0 - fx) + b.radiance * fx;
-        let bottom = c.radiance * (1.0 - fx) + e.radiance * fx;
-        let radiance = top * (1.0 - fy) + bottom * fy;
+        let (radiance, density) = interpolate(d.corners(i0, j0), fx, fy);
         let pdf = if sin_theta > 0.0 {
             // 0 outside the closed unit square (NaN included).
             let inside = (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t);
-            let top = a.density * (1.0 - fx) + b.density * fx;
-            let bottom = c.density * (1.0 - fx) + e.density * fx;
-            let pdf_area = if inside { top * (1.0 - fy) + bottom * fy } else { 0.0 };
+            let pdf_area = if inside { density } else { 0.0 };
             pdf_area / (2.0 * PI * PI * sin_theta)
         } else {
             0.0
@@ -252,11 +245,8 @@ impl EnvMapLight {
         let d = &*self.data;
         let (j0, v) = d.rows.sample_remapped(u[1]);
         let (i0, w) = d.columns[j0].sample_remapped(u[0]);
-        let within = [w, v];
-        let i1 = if i0 + 1 == d.width { 0 } else { i0 + 1 };
-        let (top_row, bottom_row) = (&d.texels[j0 * d.width..], &d.texels[(j0 + 1) * d.width..]);
-        let [a, b, c, e] = [top_row[i0], top_row[i1], bottom_row[i0], bottom_row[i1]];
-        let f = warp::bilinear(within, [a.density, b.density, c.density, e.density]);
+        let corners = d.corners(i0, j0);
+        let f = warp::bilinear([w, v], corners.map(|texel| texel.density));
         let (fx, fy) = (f.x, f.y);
         let (s, t) = ((i0 as f32 + fx) / d.width_f32, (j0 as f32 + fy) / d.cells_y_f32);
         let theta = t.min(1.0) * PI;
@@ -274,12 +264,8 @@ impl EnvMapLight {
         let [c0, c1, c2] = d.to_world;
         let direction = (c0 * local.x + c1 * local.y + c2 * local.z).normalize();
         // The same interpolation as `evaluate`, at the sampled point of the cell.
-        let top = a.radiance * (1.0 - fx) + b.radiance * fx;
-        let bottom = c.radiance * (1.0 - fx) + e.radiance * fx;
-        let radiance = top * (1.0 - fy) + bottom * fy;
-        let top = a.density * (1.0 - fx) + b.density * fx;
-        let bottom = c.density * (1.0 - fx) + e.density * fx;
-        let pdf = (top * (1.0 - fy) + bottom * fy) / (2.0 * PI * PI * sin_theta);
+        let (radiance, density) = interpolate(corners, fx, fy);
+        let pdf = density / (2.0 * PI * PI * sin_theta);
         (pdf > 0.0 && !radiance.is_black()).then_some((direction, radiance, pdf))
     }
 
@@ -299,6 +285,28 @@ impl EnvMapLight {
         let t = v.y.clamp(-1.0, 1.0).acos() / PI;
         (s, t.clamp(0.0, 1.0))
     }
+}
+
+impl EnvMapData {
+    /// The texels at the corners of lattice cell `(i0, j0)` (`j0 < H − 1`): upper left, upper
+    /// right (column `i0 + 1`, wrapping to 0), lower left, lower right.
+    #[inline]
+    fn corners(&self, i0: usize, j0: usize) -> [Texel; 4] {
+        let i1 = if i0 + 1 == self.width { 0 } else { i0 + 1 };
+        let (top, bottom) = (&self.texels[j0 * self.width..], &self.texels[(j0 + 1) * self.width..]);
+        [top[i0], top[i1], bottom[i0], bottom[i1]]
+    }
+}
+
+/// The radiance and the sampling density interpolated bilinearly at `(fx, fy)` in a cell with
+/// the `corners` of [`EnvMapData::corners`].
+#[inline]
+fn interpolate([a, b, c, e]: [Texel; 4], fx: f32, fy: f32) -> (Rgb, f32) {
+    let top = a.radiance * (1.0 - fx) + b.radiance * fx;
+    let bottom = c.radiance * (1.0 - fx) + e.radiance * fx;
+    let top_density = a.density * (1.0 - fx) + b.density * fx;
+    let bottom_density = c.density * (1.0 - fx) + e.density * fx;
+    (top * (1.0 - fy) + bottom * fy, top_density * (1.0 - fy) + bottom_density * fy)
 }
 
 /// `u − ⌊u⌋`, bit for bit, without the library `floor` for `u ∈ [−1, 1)` (the range of the
