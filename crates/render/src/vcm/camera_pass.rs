@@ -77,6 +77,10 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     wavelengths: &S::Wavelengths,
     out: &mut R,
 ) {
+    // Its vertices lie scattered over the store: start their cache misses before the first ray.
+    if it.techniques.connect {
+        light_path.warm();
+    }
     let w = wavelengths;
     let hero = S::hero_wavelength(w);
     let techniques = &it.techniques;

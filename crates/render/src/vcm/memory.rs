@@ -38,20 +38,10 @@ const ENGINE_BYTES_PER_PIXEL: usize = 4;
 /// Bytes per pixel of the per-pixel radius mode: footprints and radii (2 × f32).
 const PER_PIXEL_RADIUS_BYTES: usize = 8;
 
-/// Bytes of the range-search grid per indexed vertex, kept between iterations: sorted indices
-/// (4), sorted positions (12), and the build's scratch: keys (4), (bucket, index) pairs (8) and
-/// their positions (12). The bucket starts (4 per bucket, one bucket per vertex rounded up to a
-/// power of two) come on top.
-const GRID_BYTES_PER_VERTEX: usize = 40;
-
-/// Bytes per vertex alive only while the grid is built (the positions it is built from, 12)
-/// or while the vertices are permuted into its order (the slot map is counted apart; the
-/// "placed" flags, 1).
-const GRID_BUILD_BYTES_PER_VERTEX: usize = 12;
-
-/// Bytes of the lean grid of the memory-efficient mode per indexed vertex
-/// ([`crate::hash_grid::HashGrid::build_lean`]): sorted indices (4) and one transient `u32`
-/// (the keys while it is built, then the slot map while the records are permuted).
+/// Bytes of the range-search grid per indexed vertex ([`crate::hash_grid::HashGrid::build_lean`],
+/// both modes): sorted indices (4) and one transient `u32` (the keys while it is built; in the
+/// memory-efficient mode, then the slot map while the records are permuted). The bucket starts
+/// (4 per bucket, one bucket per vertex rounded up to a power of two) come on top.
 const LEAN_GRID_BYTES_PER_VERTEX: usize = 8;
 
 /// Bytes of the slot map that leads connections to vertices stored in grid order (u32).
@@ -173,10 +163,12 @@ fn peak_bytes(counts: &Counts, settings: &VcmSettings, memory_efficient: bool) -
     let stored = techniques.store_light_vertices();
     let grid = if techniques.merge {
         let buckets = (counts.vertices.max(1.0) as u64).next_power_of_two() as f64;
+        // The default mode keeps the slot map for its connections; the permutation's "placed"
+        // flags (1 byte) come after the keys are freed.
         let per_vertex = if memory_efficient {
             LEAN_GRID_BYTES_PER_VERTEX
         } else {
-            GRID_BYTES_PER_VERTEX + SLOT_BYTES_PER_VERTEX + GRID_BUILD_BYTES_PER_VERTEX
+            LEAN_GRID_BYTES_PER_VERTEX + SLOT_BYTES_PER_VERTEX
         };
         counts.vertices * per_vertex as f64 + 4.0 * buckets
     } else {
