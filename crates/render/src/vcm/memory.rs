@@ -163,8 +163,8 @@ fn peak_bytes(counts: &Counts, settings: &VcmSettings, memory_efficient: bool) -
     let stored = techniques.store_light_vertices();
     let grid = if techniques.merge {
         let buckets = (counts.vertices.max(1.0) as u64).next_power_of_two() as f64;
-        // The default mode keeps the slot map for its connections; the permutation's "placed"
-        // flags (1 byte) come after the keys are freed.
+        // The default mode keeps the slot map for its connections; the permutation's transient
+        // copy of it (4 bytes) comes after the keys are freed.
         let per_vertex = if memory_efficient {
             LEAN_GRID_BYTES_PER_VERTEX
         } else {

@@ -678,7 +678,7 @@ impl<S: SpectralMode> Engine<S> {
                 order.as_deref().unwrap_or(self.grid.sorted_indices()),
                 &mut slots,
             );
-            light_vertex::permute(&mut self.records, &slots);
+            light_vertex::permute(&mut self.records, &mut slots);
         } else {
             self.records.clear();
         }
