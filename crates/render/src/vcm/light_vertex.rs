@@ -778,8 +778,9 @@ mod tests {
     }
 
     /// `permute` moves every item to its destination and leaves the destinations as the
-    /// identity: sizes around the range boundaries (256 ranges; one item per range up to 256),
-    /// random permutations, the identity and a reversal (every item in another range).
+    /// identity: sizes below, at and above the cycle walk's leaf size (4096), one radix level
+    /// (10 007) and two (100 003), for random permutations, the identity and a reversal (every
+    /// item in another range).
     #[test]
     fn permute_moves_every_item_home() {
         let mut rng = math::Rng::for_stream(5, 0, 0);
