@@ -7,6 +7,12 @@
 //! points are plain positions identified by their index in the slice given to
 //! [`HashGrid::build`].
 //!
+//! The VCM engine builds the *lean* variant ([`HashGrid::build_lean`], same slots, no copy of
+//! the positions) in both of its modes: it permutes its records into slot order, so a query
+//! reads each position from the record it may merge with, at the speed of the sorted copy and
+//! 36–44 bytes per vertex less (docs/memory.md). [`HashGrid::build`] remains the general build,
+//! and the reference the lean build's tests compare with.
+//!
 //! # Layout
 //!
 //! Space is cut into cubic cells of edge slightly more than `2r` (`2r·(1 + 10⁻³)`, so that float
