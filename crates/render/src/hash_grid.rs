@@ -10,7 +10,7 @@
 //! The VCM engine builds the *lean* variant ([`HashGrid::build_lean`], same slots, no copy of
 //! the positions) in both of its modes: it permutes its records into slot order, so a query
 //! reads each position from the record it may merge with, at the speed of the sorted copy and
-//! 36–44 bytes per vertex less (docs/memory.md). [`HashGrid::build`] remains the general build,
+//! with 44 bytes per vertex less in the memory estimate (docs/memory.md). [`HashGrid::build`] remains the general build,
 //! and the reference the lean build's tests compare with.
 //!
 //! # Layout

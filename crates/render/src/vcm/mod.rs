@@ -850,10 +850,8 @@ fn build_grid<V: AsRef<MergeRecord<S>> + Sync, S: SpectralMode>(
     merge_groups: &mut Vec<MergeGroup>,
 ) -> Option<Vec<u32>> {
     merge_groups.clear();
-    // Builds the grid over the `n` points `position(0..n)`.
-    let mut build = |n: usize, position: &(dyn Fn(usize) -> math::Vec3 + Sync)| grid.build_lean(n, position, radius);
     let Some((layout, merge_paths)) = groups else {
-        build(items.len(), &|i| items[i].as_ref().position);
+        grid.build_lean(items.len(), |i| items[i].as_ref().position, radius);
         return None;
     };
     let (order, starts) = layout.order_by_group(path_ends);
@@ -862,7 +860,7 @@ fn build_grid<V: AsRef<MergeRecord<S>> + Sync, S: SpectralMode>(
         end: starts[g + 1],
         normalization_scale: if size > 0 { merge_paths / size as f32 } else { 0.0 },
     }));
-    build(order.len(), &|j| items[order[j] as usize].as_ref().position);
+    grid.build_lean(order.len(), |j| items[order[j] as usize].as_ref().position, radius);
     // Grid indices count in group order; the items are in path order.
     Some(grid.sorted_indices().iter().map(|&j| order[j as usize]).collect())
 }
