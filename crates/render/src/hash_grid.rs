@@ -13,6 +13,12 @@
 //! with 44 bytes per vertex less in the memory estimate (docs/memory.md). [`HashGrid::build`] remains the general build,
 //! and the reference the lean build's tests compare with.
 //!
+//! A query can be *planned* ahead ([`HashGrid::plan`]: the buckets of its cells, computed
+//! once) so that its caller can ask for its memory early with two prefetch hints
+//! ([`HashGrid::prefetch_buckets`], then [`HashGrid::prefetch_slots`]) and then run it with
+//! the same plan ([`HashGrid::for_each_slot_near`]); docs/performance.md, "Prefetching the
+//! merge queries", measures what that saves.
+//!
 //! # Layout
 //!
 //! Space is cut into cubic cells of edge slightly more than `2r` (`2r·(1 + 10⁻³)`, so that float
@@ -68,6 +74,11 @@ const SEARCH_SCALE: f32 = 1.0005;
 /// The block of cells a query looks at normally has at most `3×3×3` cells (`2×2×2` in
 /// practice); beyond that (absurd spreads of points) a query scans all points.
 const MAX_QUERY_CELLS: usize = 27;
+/// Records of a bucket that [`HashGrid::prefetch_slots`] asks for: a query's buckets hold about
+/// four points on SmallVCM's scenes, and the hardware prefetcher follows a sequential read.
+const PREFETCHED_PER_BUCKET: usize = 2;
+/// How far ahead the lean build's counting sort prefetches the bucket of a key.
+const SORT_AHEAD: usize = 16;
 
 /// The map from positions to cells and buckets, fixed by one build.
 #[derive(Clone, Copy, Debug)]
@@ -132,6 +143,23 @@ fn block_hash(x: u32, y: u32, z: u32) -> u32 {
     h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     h ^= h >> 31;
     (h >> 32) as u32
+}
+
+/// The buckets one query looks at, planned by [`HashGrid::plan`] for the grid it came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GridQuery {
+    /// The query visits nothing.
+    Nothing,
+    /// The distinct buckets of its (at most 2×2×2) cells, `ids[..count]`, in query order.
+    Buckets {
+        /// Bucket numbers.
+        ids: [u32; 8],
+        /// How many of `ids` are used.
+        count: usize,
+    },
+    /// Wider than two cells on some axis, or a grid of fewer than 64 buckets: the query lists
+    /// its buckets itself (rare).
+    General,
 }
 
 /// A hashed uniform grid over points, cell size (about) `2r`, built for one radius `r`.
@@ -391,8 +419,13 @@ impl HashGrid {
         });
         // Counting sort: `starts[b]` counts bucket b, becomes its end by a running sum, and is
         // moved back to its start while the points are placed from the last one (stable).
+        // Both passes over the keys jump around `starts`: the entry of the key `SORT_AHEAD`
+        // places ahead is prefetched (`keys` ≤ `bucket_count`, so every key indexes `starts`).
         self.starts.resize(bucket_count + 1, 0);
-        for &key in &self.keys {
+        for (index, &key) in self.keys.iter().enumerate() {
+            if let Some(&ahead) = self.keys.get(index + SORT_AHEAD) {
+                crate::prefetch::prefetch(&self.starts[ahead as usize]);
+            }
             self.starts[key as usize] += 1;
         }
         let stored = n - self.starts[bucket_count] as usize;
@@ -404,6 +437,9 @@ impl HashGrid {
         self.starts[bucket_count] = stored as u32;
         self.indices.resize(stored, 0);
         for (index, &key) in self.keys.iter().enumerate().rev() {
+            if let Some(&ahead) = index.checked_sub(SORT_AHEAD).map(|i| &self.keys[i]) {
+                crate::prefetch::prefetch(&self.starts[ahead as usize]);
+            }
             if key != skipped {
                 let slot = &mut self.starts[key as usize];
                 *slot -= 1;
@@ -420,12 +456,13 @@ impl HashGrid {
     }
 
     /// Calls `visit(slot)` for every stored point within `radius` (clamped to the build radius)
-    /// of `query` whose index lies in `indices` (all when `None`). The positions come from the
+    /// of `query` whose index lies in `indices` (all when `None`); `plan` is
+    /// [`HashGrid::plan`]`(query)`. The positions come from the
     /// grid's own sorted copy after [`HashGrid::build`]; a [`HashGrid::build_lean`] grid keeps
     /// none and reads the position of slot `s` as `position(s)` (the caller's data in slot order).
     pub fn for_each_slot_near(
         &self,
-        query: Vec3,
+        (query, plan): (Vec3, &GridQuery),
         radius: f32,
         indices: Option<std::ops::Range<u32>>,
         position: impl Fn(usize) -> Vec3,
@@ -433,8 +470,8 @@ impl HashGrid {
     ) {
         let radius_sq = (radius * radius).min(self.radius_sq);
         match (indices, self.keeps_positions()) {
-            (None, true) => self.for_each_slot(query, radius_sq, visit),
-            (indices, kept) => self.for_each_bucket(query, |start, end| {
+            (None, true) => self.for_each_slot(query, plan, radius_sq, visit),
+            (indices, kept) => self.for_each_bucket(query, plan, |start, end| {
                 let (first, last) = match &indices {
                     None => (start, end),
                     Some(range) => self.index_range(start, end, range),
@@ -484,7 +521,7 @@ impl HashGrid {
     /// bounding box, or with a NaN coordinate, visits nothing.
     #[inline]
     pub fn for_each_in_radius(&self, query: Vec3, mut visit: impl FnMut(usize)) {
-        self.for_each_slot(query, self.radius_sq, |slot| visit(self.indices[slot] as usize));
+        self.for_each_slot(query, &self.plan(query), self.radius_sq, |slot| visit(self.indices[slot] as usize));
     }
 
     /// The stored point indices in slot order (bucket by bucket). Data laid out in this order
@@ -498,7 +535,7 @@ impl HashGrid {
     /// [`HashGrid::sorted_indices`].
     pub fn for_each_slot_within(&self, query: Vec3, radius: f32, visit: impl FnMut(usize)) {
         let radius_sq = (radius * radius).min(self.radius_sq);
-        self.for_each_slot(query, radius_sq, visit);
+        self.for_each_slot(query, &self.plan(query), radius_sq, visit);
     }
 
     /// Like [`HashGrid::for_each_slot_within`], restricted to the points whose index (in the
@@ -514,7 +551,7 @@ impl HashGrid {
         mut visit: impl FnMut(usize),
     ) {
         let radius_sq = (radius * radius).min(self.radius_sq);
-        self.for_each_bucket(query, |start, end| {
+        self.for_each_bucket(query, &self.plan(query), |start, end| {
             let (first, last) = self.index_range(start, end, &indices);
             self.visit_slice(first, last, query, radius_sq, &mut visit);
         });
@@ -522,10 +559,10 @@ impl HashGrid {
 
     /// Visits the slots of the points within `sqrt(radius_sq)` (at most the build radius).
     #[inline]
-    fn for_each_slot(&self, query: Vec3, radius_sq: f32, mut visit: impl FnMut(usize)) {
+    fn for_each_slot(&self, query: Vec3, plan: &GridQuery, radius_sq: f32, mut visit: impl FnMut(usize)) {
         let mut ranges = [(0u32, 0u32); MAX_QUERY_CELLS];
         // Scanning every bucket in slot order is scanning every slot.
-        let count = self.query_buckets(query, &mut ranges);
+        let count = self.query_buckets(query, plan, &mut ranges);
         let ranges = match count {
             Some(count) => &ranges[..count],
             None => &[(0, self.sorted_positions.len() as u32)][..],
@@ -539,9 +576,9 @@ impl HashGrid {
     /// at `query` must look at (each range lies within one bucket), in the order of the cells
     /// (`x` fastest, then `y`, then `z`; a bucket at its first cell).
     #[inline]
-    fn for_each_bucket(&self, query: Vec3, mut visit: impl FnMut(usize, usize)) {
+    fn for_each_bucket(&self, query: Vec3, plan: &GridQuery, mut visit: impl FnMut(usize, usize)) {
         let mut ranges = [(0u32, 0u32); MAX_QUERY_CELLS];
-        let count = match self.query_buckets(query, &mut ranges) {
+        let count = match self.query_buckets(query, plan, &mut ranges) {
             Some(count) => count,
             None => {
                 // Only when float precision is exhausted (points spread over > ~10⁷ cells):
@@ -559,30 +596,115 @@ impl HashGrid {
         }
     }
 
-    /// Writes to `ranges` the slot ranges of the distinct non-empty buckets of the cells a query
-    /// at `query` looks at (in [`HashGrid::for_each_bucket`]'s order) and returns their number,
-    /// or `None` when the query must scan every bucket (more than [`MAX_QUERY_CELLS`] cells).
+    /// The cells a query at `query` looks at (per axis the first and last), or `None` when it
+    /// visits nothing (no points, a NaN coordinate, or outside the points' bounding box).
     #[inline]
-    fn query_buckets(&self, query: Vec3, ranges: &mut [(u32, u32); MAX_QUERY_CELLS]) -> Option<usize> {
+    fn query_cells(&self, query: Vec3) -> Option<[(u32, u32); 3]> {
         if self.indices.is_empty() || !query.is_finite() {
-            return Some(0);
+            return None;
         }
         let map = &self.map;
         let lo = map.scaled(query - Vec3::splat(self.search_extent));
         let hi = map.scaled(query + Vec3::splat(self.search_extent));
         let mut cells = [(0u32, 0u32); 3];
-        let mut cell_count = 1u64;
         for (axis, range) in cells.iter_mut().enumerate() {
             // Every point p has 0 <= scaled(p) <= max_scaled; monotonicity does the rest.
             if !(hi[axis] >= 0.0 && lo[axis] <= map.max_scaled[axis]) {
-                return Some(0);
+                return None;
             }
             *range = (map.cell(lo[axis].max(0.0), axis), map.cell(hi[axis], axis));
-            cell_count *= u64::from(range.1 - range.0) + 1;
         }
-        if cell_count > MAX_QUERY_CELLS as u64 {
-            return None;
+        Some(cells)
+    }
+
+    /// Plans the query at `query`: the buckets of its cells, computed once for the prefetch
+    /// hints ([`HashGrid::prefetch_buckets`], [`HashGrid::prefetch_slots`]) and the query itself
+    /// ([`HashGrid::for_each_slot_near`]).
+    #[inline]
+    pub fn plan(&self, query: Vec3) -> GridQuery {
+        let Some(cells) = self.query_cells(query) else { return GridQuery::Nothing };
+        let map = &self.map;
+        // With at least 64 buckets a bucket keeps its cell's 6 low (Morton) bits, which hold
+        // bits 0 and 1 of every coordinate: cells whose coordinates differ by 1 or 2 on some
+        // axis never share a bucket. So when every axis spans at most two cells (the normal
+        // case) the buckets are distinct, and each 4×4×4 block's hash is computed once.
+        let narrow = cells.iter().all(|&(first, last)| last - first <= 1);
+        if !(narrow && map.bucket_mask >= 63) {
+            return GridQuery::General;
         }
+        let mut ids = [0u32; 8];
+        let mut count = 0;
+        let [(x0, x1), (y0, y1), (z0, z1)] = cells;
+        let (bx0, bx1) = (x0 >> 2, x1 >> 2);
+        let mut row: Option<(u32, u32, u32, u32)> = None;
+        for z in z0..=z1 {
+            for y in y0..=y1 {
+                let (by, bz) = (y >> 2, z >> 2);
+                let (h0, h1) = match row {
+                    Some((ry, rz, h0, h1)) if (ry, rz) == (by, bz) => (h0, h1),
+                    _ => {
+                        let h0 = block_hash(bx0, by, bz);
+                        let h1 = if bx1 == bx0 { h0 } else { block_hash(bx1, by, bz) };
+                        row = Some((by, bz, h0, h1));
+                        (h0, h1)
+                    }
+                };
+                let low_yz = morton_low(y) << 1 | morton_low(z) << 2;
+                ids[count] = (h0 << 6 | morton_low(x0) | low_yz) & map.bucket_mask;
+                count += 1;
+                if x1 != x0 {
+                    ids[count] = (h1 << 6 | morton_low(x1) | low_yz) & map.bucket_mask;
+                    count += 1;
+                }
+            }
+        }
+        GridQuery::Buckets { ids, count }
+    }
+
+    /// Prefetch hint, the first of two stages ahead of a query: the bucket starts of its
+    /// cells. It changes no result; issued early enough (the camera pass issues it as soon as
+    /// a hit is found), the query's first cache miss is over when the query comes.
+    #[inline]
+    pub fn prefetch_buckets(&self, plan: &GridQuery) {
+        if let GridQuery::Buckets { ids, count } = plan {
+            for &bucket in &ids[..*count] {
+                if let Some(start) = self.starts.get(bucket as usize) {
+                    crate::prefetch::prefetch(start);
+                }
+            }
+        }
+    }
+
+    /// Prefetch hint, the second stage: the first two records of `data` (the caller's records
+    /// in slot order) in every bucket of the query, which the query will distance-test. Reads
+    /// the bucket starts, so it should come a while after [`HashGrid::prefetch_buckets`].
+    #[inline]
+    pub fn prefetch_slots<T>(&self, plan: &GridQuery, data: &[T]) {
+        if let GridQuery::Buckets { ids, count } = plan {
+            for &bucket in &ids[..*count] {
+                let bucket = bucket as usize;
+                let (Some(&start), Some(&end)) = (self.starts.get(bucket), self.starts.get(bucket + 1)) else {
+                    continue;
+                };
+                let (start, end) = (start as usize, end as usize);
+                for item in data.get(start..end.min(start + PREFETCHED_PER_BUCKET)).unwrap_or(&[]) {
+                    crate::prefetch::prefetch(item);
+                }
+            }
+        }
+    }
+
+    /// Writes to `ranges` the slot ranges of the distinct non-empty buckets of the cells a query
+    /// at `query` (planned as `plan`) looks at (in [`HashGrid::for_each_bucket`]'s order) and
+    /// returns their number, or `None` when the query must scan every bucket (more than
+    /// [`MAX_QUERY_CELLS`] cells).
+    #[inline]
+    fn query_buckets(
+        &self,
+        query: Vec3,
+        plan: &GridQuery,
+        ranges: &mut [(u32, u32); MAX_QUERY_CELLS],
+    ) -> Option<usize> {
         let mut count = 0;
         let mut push = |bucket: u32| {
             let (start, end) = (self.starts[bucket as usize], self.starts[bucket as usize + 1]);
@@ -591,42 +713,25 @@ impl HashGrid {
                 count += 1;
             }
         };
-        // With at least 64 buckets a bucket keeps its cell's 6 low (Morton) bits, which hold
-        // bits 0 and 1 of every coordinate: cells whose coordinates differ by 1 or 2 on some
-        // axis never share a bucket. So when every axis spans at most two cells (the normal
-        // case) the buckets are distinct, and each 4×4×4 block's hash is computed once.
-        let narrow = cells.iter().all(|&(first, last)| last - first <= 1);
-        if narrow && map.bucket_mask >= 63 {
-            let [(x0, x1), (y0, y1), (z0, z1)] = cells;
-            let (bx0, bx1) = (x0 >> 2, x1 >> 2);
-            let mut row: Option<(u32, u32, u32, u32)> = None;
-            for z in z0..=z1 {
-                for y in y0..=y1 {
-                    let (by, bz) = (y >> 2, z >> 2);
-                    let (h0, h1) = match row {
-                        Some((ry, rz, h0, h1)) if (ry, rz) == (by, bz) => (h0, h1),
-                        _ => {
-                            let h0 = block_hash(bx0, by, bz);
-                            let h1 = if bx1 == bx0 { h0 } else { block_hash(bx1, by, bz) };
-                            row = Some((by, bz, h0, h1));
-                            (h0, h1)
-                        }
-                    };
-                    let low_yz = morton_low(y) << 1 | morton_low(z) << 2;
-                    push((h0 << 6 | morton_low(x0) | low_yz) & map.bucket_mask);
-                    if x1 != x0 {
-                        push((h1 << 6 | morton_low(x1) | low_yz) & map.bucket_mask);
-                    }
-                }
+        match plan {
+            GridQuery::Nothing => return Some(0),
+            GridQuery::Buckets { ids, count: n } => {
+                ids[..*n].iter().for_each(|&bucket| push(bucket));
+                return Some(count);
             }
-            return Some(count);
+            GridQuery::General => {}
+        }
+        let Some(cells) = self.query_cells(query) else { return Some(0) };
+        let cell_count: u64 = cells.iter().map(|&(first, last)| u64::from(last - first) + 1).product();
+        if cell_count > MAX_QUERY_CELLS as u64 {
+            return None;
         }
         let mut buckets = [0u32; MAX_QUERY_CELLS];
         let mut distinct = 0;
         for z in cells[2].0..=cells[2].1 {
             for y in cells[1].0..=cells[1].1 {
                 for x in cells[0].0..=cells[0].1 {
-                    let bucket = map.bucket(x, y, z);
+                    let bucket = self.map.bucket(x, y, z);
                     if !buckets[..distinct].contains(&bucket) {
                         buckets[distinct] = bucket;
                         distinct += 1;
@@ -892,6 +997,52 @@ mod tests {
         Some(ranges.filter(|&(start, end)| start < end).collect())
     }
 
+    /// A plan lists the distinct buckets of the query's cells in the reference order when they
+    /// are at most 2×2×2 on a grid of at least 64 buckets, `Nothing` for queries that visit
+    /// nothing and `General` otherwise; the prefetch hints accept every plan and any record
+    /// slice, also one shorter than the grid's slots.
+    #[test]
+    fn plans_list_the_query_buckets_and_hints_accept_any_plan() {
+        let points = clustered_points(4_000, 4);
+        for (limit, radius) in [(usize::MAX, 0.02), (32, 0.02), (usize::MAX, 0.003)] {
+            let mut grid = HashGrid::with_bucket_limit(limit);
+            grid.build(&points, radius);
+            let mut qs = queries(&grid, &points, radius, 12);
+            qs.extend([Vec3::NAN, Vec3::splat(-5.0), Vec3::splat(1e30)]);
+            let mut kinds = [0; 3];
+            for q in qs {
+                let plan = grid.plan(q);
+                kinds[match plan {
+                    GridQuery::Nothing => 0,
+                    GridQuery::Buckets { .. } => 1,
+                    GridQuery::General => 2,
+                }] += 1;
+                match plan {
+                    GridQuery::Buckets { ids, count } => {
+                        assert!(limit >= 64, "query {q}: a grid of {limit} buckets gets no bucket list");
+                        let mut expected: Vec<(u32, u32)> =
+                            ids[..count].iter().map(|&b| (grid.starts[b as usize], grid.starts[b as usize + 1])).collect();
+                        expected.retain(|&(start, end)| start < end);
+                        assert_eq!(Some(expected), reference_buckets(&grid, q), "query {q}");
+                        let mut distinct = ids[..count].to_vec();
+                        distinct.sort_unstable();
+                        distinct.dedup();
+                        assert_eq!(distinct.len(), count, "query {q}: repeated buckets");
+                    }
+                    GridQuery::Nothing => assert_eq!(reference_buckets(&grid, q), Some(Vec::new()), "query {q}"),
+                    GridQuery::General => assert!(limit < 64, "query {q}: general plan on a large grid"),
+                }
+                grid.prefetch_buckets(&plan);
+                for records in [&points[..], &points[..10], &[]] {
+                    grid.prefetch_slots(&plan, records);
+                }
+            }
+            // Every kind of plan was met (at least the three added queries visit nothing).
+            assert!(kinds[0] >= 3, "limit {limit}: {kinds:?}");
+            assert!(if limit >= 64 { kinds[1] > 0 } else { kinds[2] > 0 }, "limit {limit}: {kinds:?}");
+        }
+    }
+
     /// A query lists the same bucket ranges in the same order as [`reference_buckets`] (merged
     /// values are summed in visit order, so images depend on it), with and without collisions
     /// and for the fallback.
@@ -916,7 +1067,7 @@ mod tests {
             qs.extend([Vec3::splat(4.0), Vec3::new(4.0, 3.95, 4.02), Vec3::NAN, Vec3::splat(-5.0)]);
             for q in qs {
                 let mut ranges = [(0, 0); MAX_QUERY_CELLS];
-                let got = grid.query_buckets(q, &mut ranges).map(|n| ranges[..n].to_vec());
+                let got = grid.query_buckets(q, &grid.plan(q), &mut ranges).map(|n| ranges[..n].to_vec());
                 assert_eq!(got, reference_buckets(&grid, q), "query {q}, radius {radius}, limit {limit}");
             }
         }
@@ -1039,7 +1190,7 @@ mod tests {
                         None => full.for_each_slot_within(q, radius, |s| expected.push(s)),
                         Some(r) => full.for_each_slot_within_indices(q, radius, r.clone(), |s| expected.push(s)),
                     }
-                    lean.for_each_slot_near(q, radius, range.clone(), position, |s| got.push(s));
+                    lean.for_each_slot_near((q, &lean.plan(q)), radius, range.clone(), position, |s| got.push(s));
                     assert_eq!(got, expected, "query {q}, indices {range:?}");
                     found += got.len();
                 }

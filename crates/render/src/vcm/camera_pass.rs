@@ -79,7 +79,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
 ) {
     // Its vertices lie scattered over the store: start their cache misses before the first ray.
     if it.techniques.connect {
-        light_path.warm();
+        light_path.prefetch();
     }
     let w = wavelengths;
     let hero = S::hero_wavelength(w);
@@ -159,6 +159,8 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             }
             break;
         };
+        // The merge query's cache misses start now and are over by the time it comes.
+        let grid_query = merge_source.map(|source| source.plan_and_prefetch(hit.position));
         // A thin dielectric's straight-through transmission is no vertex in media.
         let mut presampled = None;
         if media_active {
@@ -210,12 +212,18 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             position: hit.position,
             fluorescent: fluorescent.as_ref(),
             side,
+            grid_query,
         };
         let mut specular_only = false;
         if !bsdf.is_delta() {
             if techniques.connect {
                 // Next-event estimation (s = 1).
                 out.record(Family::NextEvent, 1, t, next_event(scene, &path, &end, rng, k, w).to_rgb(w));
+            }
+            if let (Some(source), Some(plan)) = (merge_source, &grid_query) {
+                source.prefetch_records(plan);
+            }
+            if techniques.connect {
                 // Connections to the pixel's light sub-path (s, t > 1), stored in path order.
                 for (index, light) in light_path.iter().enumerate() {
                     if light.record.path_length() + 1 + path.path_length > it.max_length {
@@ -301,6 +309,7 @@ fn medium_vertex<S: SpectralMode, R: Record>(
         position,
         fluorescent: None,
         side: MediumSide::inside(Some(medium)),
+        grid_query: None,
     };
     if techniques.connect {
         out.record(Family::NextEvent, 1, t, next_event(scene, path, &end, rng, k, w).to_rgb(w));

@@ -16,6 +16,7 @@ use super::medium::{MediumSide, Scatterer, segment};
 use super::mis::{self, ConnectionPdfs, MisConstants, NeePdfs};
 use super::subpath::SubPath;
 use crate::fluorescent::{FluorescentVertex, scatter_slots, view};
+use crate::hash_grid::GridQuery;
 
 /// A light-tracing contribution.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -242,6 +243,10 @@ pub struct CameraEnd<'a> {
     pub fluorescent: Option<&'a FluorescentVertex<'a>>,
     /// The media around it.
     pub side: MediumSide,
+    /// Its merge query planned on the merging grid when the hit was found, with the first
+    /// prefetch hint ([`super::merge::MergeSource::plan_and_prefetch`]); `None`: the merge
+    /// plans it.
+    pub grid_query: Option<GridQuery>,
 }
 
 impl CameraEnd<'_> {

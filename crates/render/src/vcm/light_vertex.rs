@@ -444,15 +444,16 @@ impl<'a, S: SpectralMode> LightPath<'a, S> {
         LightPathIter { path: self, next: 0 }
     }
 
-    /// Reads every vertex once, in one loop whose result is kept opaque to the optimiser, so
-    /// that their cache misses overlap with each other and with the caller's next work
-    /// (memory-level parallelism) instead of coming one by one at the first connections: the
-    /// safe stand-in for prefetching. Stored in grid slot order, a path's vertices lie far
-    /// apart; this removed a third of the camera pass's self time on SmallVCM's scene 2
-    /// (docs/performance.md, "Memory latency in the VCM camera pass").
+    /// Prefetches every vertex ([`crate::prefetch`]), so that their cache misses overlap with
+    /// each other and with the caller's next work instead of coming one by one at the first
+    /// connections: stored in grid slot order, a path's vertices lie far apart. (Before, one
+    /// loop read them all with its result kept opaque to the optimiser, which removed a third
+    /// of the camera pass's self time on SmallVCM's scene 2, docs/performance.md, "Memory
+    /// latency in the VCM camera pass"; a read that misses still stalls retirement, a prefetch
+    /// does not.)
     #[inline]
-    pub fn warm(self) {
-        std::hint::black_box(self.iter().fold(0u32, |acc, v| acc ^ v.record.path_length()));
+    pub fn prefetch(self) {
+        self.iter().for_each(crate::prefetch::prefetch);
     }
 }
 

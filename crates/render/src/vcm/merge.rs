@@ -11,7 +11,7 @@ use super::mis::{self, MisConstants};
 use super::subpath::{Scattered, SubPath};
 use super::technique_images::Record;
 use crate::fluorescent::view;
-use crate::hash_grid::HashGrid;
+use crate::hash_grid::{GridQuery, HashGrid};
 use math::Rng;
 
 /// How merges are weighted.
@@ -42,6 +42,27 @@ pub struct MergeSource<'a, S: SpectralMode = Rgb> {
     pub grid: &'a HashGrid,
     /// Which of them, and at which wavelengths.
     pub scope: MergeScope<'a, S>,
+}
+
+impl<S: SpectralMode> MergeSource<'_, S> {
+    /// Plans the merge query at `position` ([`HashGrid::plan`]) and issues its first prefetch
+    /// hint (the grid's bucket starts); pass the plan to [`MergeSource::prefetch_records`]
+    /// later, and to [`merge`] in [`CameraEnd::grid_query`].
+    #[inline]
+    pub fn plan_and_prefetch(&self, position: Vec3) -> GridQuery {
+        let plan = self.grid.plan(position);
+        self.grid.prefetch_buckets(&plan);
+        plan
+    }
+
+    /// The second prefetch hint of a planned merge query: the first records of its buckets.
+    #[inline]
+    pub fn prefetch_records(&self, plan: &GridQuery) {
+        match self.vertices {
+            MergeVertices::Full(v) => self.grid.prefetch_slots(plan, v),
+            MergeVertices::Compact(v) => self.grid.prefetch_slots(plan, v),
+        }
+    }
 }
 
 /// Which stored light vertices a camera vertex merges with, and at which wavelengths.
@@ -257,6 +278,7 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
         Some(scattered * weight)
     };
     let t = camera.path_length + 1;
+    let plan = end.grid_query.unwrap_or_else(|| grid.plan(position));
     // Positions of the slots, for a grid that keeps none (the memory-efficient mode).
     let at = |slot: usize| vertices[slot].as_ref().position;
     match source.scope {
@@ -275,7 +297,7 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
                 MergeScope::Group(g) => Some(g.first..g.end),
                 _ => None,
             };
-            grid.for_each_slot_near(position, radius, range, at, visit);
+            grid.for_each_slot_near((position, &plan), radius, range, at, visit);
             (camera.throughput * view(&camera.slots, sum) * normalization).to_rgb(wavelengths)
         }
         MergeScope::AcrossGroups(groups, sets) => {
@@ -290,7 +312,7 @@ fn merge_with<S: SpectralMode, R: Record, V: AsRef<MergeRecord<S>>>(
             // total, which changes no sum: it is skipped, and its throughput never computed.
             let mut found = 0u32;
             let indices = grid.sorted_indices();
-            grid.for_each_slot_near(position, radius, None, at, |slot| {
+            grid.for_each_slot_near((position, &plan), radius, None, at, |slot| {
                 let index = indices[slot];
                 let h = groups.iter().position(|g| index < g.end).unwrap_or(groups.len() - 1);
                 let light = vertices[slot].as_ref();

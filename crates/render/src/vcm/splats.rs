@@ -15,6 +15,9 @@ use super::connect::{Splat, SplatTarget};
 use super::technique_images::TechniqueFrame;
 use super::{Family, FamilyValues, RejectedCounts};
 
+/// How many splats ahead [`SplatSums::add`] prefetches a pixel's sum.
+const SPLAT_AHEAD: usize = 8;
+
 /// Per-pixel sums of one iteration's splats, and the splats themselves when recorded.
 #[derive(Debug, Default)]
 pub(super) struct SplatSums {
@@ -54,7 +57,13 @@ impl SplatSums {
         if !splats.is_empty() && self.sums.is_empty() {
             self.sums.resize(self.pixels, Rgb::BLACK);
         }
-        for splat in splats.iter() {
+        for (index, splat) in splats.iter().enumerate() {
+            // The pixels of the splats lie anywhere in the frame: start the miss of a later one.
+            if let Some(SplatTarget::Pixel(pixel)) = splats.get(index + SPLAT_AHEAD).map(|s| s.target)
+                && let Some(sum) = self.sums.get(pixel as usize)
+            {
+                crate::prefetch::prefetch(sum);
+            }
             if !splat.value.is_finite() {
                 self.rejected += 1;
             }

@@ -1,0 +1,31 @@
+//! The software prefetch hint: the workspace's only `unsafe` code.
+//!
+//! The VCM camera pass waits for memory: a merge query reads a bucket start in a 4 MB table and
+//! then the light vertices of the bucket in a 36 MB store (SmallVCM's scene 1 at 512²), both at
+//! addresses that nothing before the query can predict, so the hardware prefetcher cannot help
+//! and an ordinary load issued early only moves the stall (a load that misses blocks retirement
+//! wherever it is). A prefetch instruction does not: it starts the miss and retires. Issued at
+//! the hit (bucket starts), after next-event estimation (the first records of each bucket) and
+//! at the start of a camera path (the vertices of the pixel's light sub-path), it takes 7–13 %
+//! off the VCM iteration on SmallVCM's four scenes (docs/performance.md, "Prefetching the merge
+//! queries"). That measurement is what the exception to the workspace's `unsafe_code = "deny"`
+//! rests on; `.ci/run` checks that no other file allows `unsafe_code`.
+
+/// Asks the processor to bring the cache line that holds `item` into every cache level.
+///
+/// A hint only: it changes no value the program computes, whether or not the processor acts
+/// on it. A no-op on targets other than x86-64.
+#[inline(always)]
+#[allow(unsafe_code)]
+pub fn prefetch<T>(item: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `_mm_prefetch` is unsafe only because it takes a raw pointer and needs SSE. The
+    // pointer comes from a live reference, so it points into valid memory (a prefetch would not
+    // fault even otherwise: it never dereferences architecturally), and SSE is part of the
+    // x86-64 baseline that every x86-64 build of this crate targets.
+    unsafe {
+        core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>((item as *const T).cast::<i8>());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = item;
+}
