@@ -1020,8 +1020,10 @@ mod tests {
                 match plan {
                     GridQuery::Buckets { ids, count } => {
                         assert!(limit >= 64, "query {q}: a grid of {limit} buckets gets no bucket list");
-                        let mut expected: Vec<(u32, u32)> =
-                            ids[..count].iter().map(|&b| (grid.starts[b as usize], grid.starts[b as usize + 1])).collect();
+                        let mut expected: Vec<(u32, u32)> = ids[..count]
+                            .iter()
+                            .map(|&b| (grid.starts[b as usize], grid.starts[b as usize + 1]))
+                            .collect();
                         expected.retain(|&(start, end)| start < end);
                         assert_eq!(Some(expected), reference_buckets(&grid, q), "query {q}");
                         let mut distinct = ids[..count].to_vec();
