@@ -16,6 +16,13 @@ What it measures (issue #13's table; every figure is a ratio of two runs made mi
    `vcm`'s relMSE after EQUAL seconds against a REFERENCE-iteration `vcm` render of ours with
    another seed (cached; its noise is part of both errors). Not SmallVCM's own: it has no seed
    option, so its equal-time render would repeat the first iterations of its reference.
+4. A caustic scene (`../shared/scenes/mitsuba/caustic-cbox/cbox.xml`: glass and mirror spheres
+   in a Cornell box, 256x256, `max_depth` 6): Mitsuba 3 `path` renders CAUSTIC_SPP samples per
+   pixel (median time T over the seeds); we render the file for T seconds with `pt`, `bpt` and
+   `vcm`. Error: relMSE against a CAUSTIC_REFERENCE-iteration `vcm` render of ours with another
+   seed (cached; no converged Mitsuba image of this scene exists, and its path tracer would need
+   hours for one). So that this reference cannot favour us, the table also gives the channel
+   means of Mitsuba's renders against it. Written to its own table (`--only caustic`).
 
 Render times are the renderers' own (Mitsuba: `mi.render` until the image is in memory; ours: the
 summary line's render time, which excludes loading), except for SmallVCM's table, which times
@@ -32,7 +39,8 @@ Usage (from the repository root, after `cargo build --release`):
     scripts/peer-bench.py                      # everything, print the tables
     scripts/peer-bench.py --update             # ... and rewrite docs/performance.md's peers table
     scripts/peer-bench.py --quick              # tiny settings: checks the pipeline in ~2 minutes
-    scripts/peer-bench.py --only smallvcm      # one peer (mitsuba | smallvcm)
+    scripts/peer-bench.py --only smallvcm      # one part (mitsuba | smallvcm | caustic)
+    scripts/peer-bench.py --only caustic --update   # ... and rewrite the caustic table only
 """
 
 import argparse
@@ -235,6 +243,63 @@ def mitsuba_matpreview(vcm, settings):
     return rows
 
 
+def channel_means(mi, paths):
+    """Per-channel means (R, G, B) of the average of the images at `paths`."""
+    import numpy as np
+
+    stack = np.stack([np.array(mi.Bitmap(p), dtype=np.float64)[..., :3] for p in paths])
+    return [float(m) for m in np.mean(stack, axis=(0, 1, 2))]
+
+
+def mitsuba_caustic(vcm, settings):
+    mi = llvm_variant()
+    path = os.path.join(SHARED, "caustic-cbox", "cbox.xml")
+    if not os.path.exists(path):
+        raise Skip(f"{path} is missing (../shared beside the repository)")
+    iterations = settings["caustic_reference"]
+    reference = scratch("caustic", f"reference-vcm-{iterations}.exr")
+    if not os.path.exists(reference):
+        log(f"caustic box: reference, {iterations} iterations of our vcm, seed {REFERENCE_SEED} (cached)")
+        vcm_render(vcm, ["--scene", path, "-a", "vcm", "-i", str(iterations), "--seed", str(REFERENCE_SEED),
+                         "--quiet"], reference)
+    scene = mi.load_file(path)
+    spp, seeds = settings["caustic_spp"], settings["seeds"]
+    mitsuba_render(mi, scene, spp, 1000, scratch("caustic", "warmup.exr"))  # JIT compilation
+    times, errors, outputs = [], [], []
+    for seed in range(seeds):
+        outputs.append(scratch("caustic", f"mitsuba-{seed}.exr"))
+        times.append(mitsuba_render(mi, scene, spp, seed, outputs[-1]))
+        errors.append(rel_mse(vcm, outputs[-1], reference))
+    budget = statistics.median(times)
+    log(f"caustic box: Mitsuba path {spp} spp in {budget:.2f} s, relMSE {statistics.mean(errors):.3g}")
+    rows = [("Mitsuba 3 `path`", f"{spp} spp", budget, statistics.mean(errors))]
+    for algorithm in ("pt", "bpt", "vcm"):
+        ours_times, ours_errors = [], []
+        for seed in range(seeds):
+            output = scratch("caustic", f"{algorithm}-{seed}.exr")
+            seconds, _ = vcm_render(vcm, ["--scene", path, "-a", algorithm, "-t", f"{budget:.3f}", "--seed", str(seed),
+                                          "--quiet"], output)
+            ours_times.append(seconds)
+            ours_errors.append(rel_mse(vcm, output, reference))
+        rows.append((f"ours `{algorithm}`", f"`-t {budget:.2f}`", statistics.mean(ours_times),
+                     statistics.mean(ours_errors)))
+        log(f"caustic box: ours {algorithm} relMSE {statistics.mean(ours_errors):.3g}")
+    agreement = [m / r for m, r in zip(channel_means(mi, outputs), channel_means(mi, [reference]))]
+    side_by_side(mi, [outputs[0], scratch("caustic", "vcm-0.exr")], scratch("caustic", "equal-time.jpg"))
+    return rows, agreement
+
+
+def side_by_side(mi, paths, output):
+    """Writes the images at `paths` side by side as an sRGB JPEG (clamped, no exposure change)."""
+    import numpy as np
+
+    images = [np.array(mi.Bitmap(p), dtype=np.float32)[..., :3] for p in paths]
+    gap = np.ones((images[0].shape[0], 4, 3), dtype=np.float32)
+    row = np.concatenate([x for image in images for x in (image, gap)][:-1], axis=1)
+    bitmap = mi.Bitmap(np.clip(row, 0.0, 1.0)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, srgb_gamma=True)
+    bitmap.write(output, quality=90)
+
+
 # ---------------------------------------------------------------------------------------------
 # SmallVCM.
 
@@ -335,10 +400,24 @@ def tables(results, settings, commands, stamp):
     return "\n".join(out).rstrip()
 
 
+def caustic_table(results, settings, commands, stamp):
+    rows, agreement = results["caustic"]
+    base = rows[0][3]
+    ratios = ", ".join(f"{r:.4f}" for r in agreement)
+    out = [stamp(commands, script="scripts/peer-bench.py"), "",
+           f"**Caustic box, equal time** (`caustic-cbox/cbox.xml`, 256², relMSE against a "
+           f"{settings['caustic_reference']}-iteration `vcm` render of ours with seed {REFERENCE_SEED}; mean of "
+           f"{settings['seeds']} seeds; ratio = ours / Mitsuba 3, below 1 is better; Mitsuba's renders' channel means "
+           f"/ the reference's: {ratios}):", "",
+           "| renderer | budget | seconds | relMSE | ratio |", "|---|---|---|---|---|"]
+    out += [f"| {n} | {b} | {s:.2f} | {e:.3g} | {e / base:.2f} |" for n, b, s, e in rows]
+    return "\n".join(out)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="tiny settings, to check the pipeline")
-    parser.add_argument("--only", choices=["mitsuba", "smallvcm"])
+    parser.add_argument("--only", choices=["mitsuba", "smallvcm", "caustic"])
     parser.add_argument("--smallvcm-src", help="a SmallVCM checkout (else it is cloned into target/peer-bench)")
     parser.add_argument("--update", action="store_true", help="rewrite the peers table of docs/performance.md")
     parser.add_argument("--vcm", default=os.path.join(ROOT, "target", "release", "vcm"))
@@ -348,16 +427,19 @@ def main():
     if not os.access(args.vcm, os.X_OK):
         fail(f"'{args.vcm}' is not an executable: run cargo build --release first")
     settings = {"cornell_spp": 256, "seeds": 3, "matpreview_spp": 16, "matpreview_renders": 4,
-                "iterations": 8, "equal_seconds": 10, "reference": 256}
+                "iterations": 8, "equal_seconds": 10, "reference": 256, "caustic_spp": 64,
+                "caustic_reference": 4000}
     if args.quick:
         settings = {"cornell_spp": 8, "seeds": 1, "matpreview_spp": 2, "matpreview_renders": 2,
-                    "iterations": 1, "equal_seconds": 1, "reference": 4}
+                    "iterations": 1, "equal_seconds": 1, "reference": 4, "caustic_spp": 4,
+                    "caustic_reference": 8}
     flags = " --quick" if args.quick else ""
     commands = [f"scripts/peer-bench.py{flags}" + (f" --only {args.only}" if args.only else "")]
     results, skipped = {}, []
     jobs = [("cornell", "mitsuba", lambda: mitsuba_cornell(args.vcm, settings)),
             ("matpreview", "mitsuba", lambda: mitsuba_matpreview(args.vcm, settings)),
-            ("smallvcm", "smallvcm", lambda: smallvcm(args.vcm, settings, args.smallvcm_src))]
+            ("smallvcm", "smallvcm", lambda: smallvcm(args.vcm, settings, args.smallvcm_src)),
+            ("caustic", "caustic", lambda: mitsuba_caustic(args.vcm, settings))]
     for name, peer, job in jobs:
         if args.only not in (None, peer):
             continue
@@ -366,7 +448,11 @@ def main():
         except Skip as reason:
             skipped.append(f"{name}: SKIPPED: {reason}")
     helpers = perf_tables()
-    text = tables(results, settings, commands, helpers.stamp)
+    caustic = caustic_table(results, settings, commands, helpers.stamp) if "caustic" in results else None
+    if args.only == "caustic":
+        text = caustic or ""
+    else:
+        text = tables(results, settings, commands, helpers.stamp) + ("\n\n" + caustic if caustic else "")
     if skipped:
         text += "\n\n" + "\n".join(f"- {s}" for s in skipped)
     print(text)
@@ -376,7 +462,13 @@ def main():
         if args.quick or skipped:
             fail("--update needs the full settings and every peer (not --quick, nothing skipped)")
         os.chdir(ROOT)
-        helpers.replace_between("docs/performance.md", "peers", text)
+        # The peers table holds the Mitsuba and SmallVCM parts together: only a run of both
+        # rewrites it. The caustic table has a block of its own.
+        if args.only is None:
+            helpers.replace_between("docs/performance.md", "peers", tables(results, settings, commands, helpers.stamp))
+        if caustic:
+            helpers.replace_between("docs/performance.md", "peers-caustic", caustic)
+            shutil.copyfile(scratch("caustic", "equal-time.jpg"), os.path.join("docs", "images", "caustic-equal-time.jpg"))
     sys.exit(1 if skipped else 0)
 
 
