@@ -15,9 +15,10 @@ use std::sync::Arc;
 use scene::desc::LightDesc;
 use spectrum::Rgb;
 
+use super::lights::light_image;
 use super::parser::Directive;
 use super::transform::{Mat4, normalize};
-use super::{err, f32v, light_image, resolve, similarity_scale};
+use super::{err, f32v, resolve, similarity_scale};
 use crate::scene_error::SceneError;
 
 /// The light of directive `d` (file `file`) under the transformation `ctm`, with the intensity
