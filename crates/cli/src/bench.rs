@@ -55,7 +55,7 @@ pub struct BenchArgs {
     child: bool,
 }
 
-/// The table's header; rows come from [`row`].
+/// The table's header; rows come from `row`.
 const HEADER: [&str; 9] = [
     "scene",
     "algorithm",

@@ -116,7 +116,7 @@ struct RenderArgs {
     /// (.xml) or pbrt-v4 (.pbrt).
     #[arg(long, default_value = "cornell-sun")]
     scene: String,
-    /// Set a scene-file parameter, overriding its <default> (Mitsuba: `$NAME`); repeatable.
+    /// Set a scene-file parameter, overriding its `<default>` (Mitsuba: `$NAME`); repeatable.
     #[arg(short = 'D', long = "define", value_name = "NAME=VALUE")]
     defines: Vec<String>,
     /// Build the Cornell box from a bit mask instead (0-1023, see `vcm scenes`); overrides --scene.

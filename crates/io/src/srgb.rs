@@ -17,7 +17,7 @@ pub fn srgb_eotf(encoded: f64) -> f64 {
 /// (NaN becomes 0), applies [`srgb_oetf`] and rounds to the nearest code.
 ///
 /// The result is bit for bit `round(255 · srgb_oetf(clamped))`, found without a power function:
-/// the code is the number of [`thresholds`] at or below the clamped value (a binary search of
+/// the code is the number of `thresholds` at or below the clamped value (a binary search of
 /// 255 entries). A 512² PNG preview took 120 M instructions with one `powf` per channel.
 pub fn linear_to_srgb8(linear: f64) -> u8 {
     let clamped = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, 1.0) };

@@ -71,7 +71,7 @@ pub fn decode(code: u32) -> Vec3 {
 /// The candidates are compared by cross-multiplication, so there is no division either.
 ///
 /// The four candidates are evaluated side by side, one per lane of a [`Vec4`], with the
-/// operations (and their order) of [`unfold`], [`Vec3::cross`] and [`Vec3::length_squared`]
+/// operations (and their order) of `unfold`, [`Vec3::cross`] and [`Vec3::length_squared`]
 /// lane by lane, so the code is the one a candidate-by-candidate loop picks, bit for bit.
 #[inline]
 pub fn encode(v: Vec3) -> u32 {

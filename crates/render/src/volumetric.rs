@@ -33,7 +33,7 @@
 //! transmission of a thin dielectric is handled the same way (its expected weight is the shadow
 //! rays' factor `T·(1 − R')`), so an emitter found behind a thin dielectric is weighted by MIS
 //! against next-event estimation through it instead of counting as seen through a specular
-//! vertex. Both sides decide with the same test ([`null_factor`]), which keeps the weights of
+//! vertex. Both sides decide with the same test (`null_factor`), which keeps the weights of
 //! every path summing to one.
 //!
 //! Path length counts scattering vertices (surface or medium) as the surface-only tracer

@@ -10,7 +10,7 @@
 //!
 //! The steps of a session, shared by every front end: [`Prepared::new`] (request to loaded,
 //! checked scene and settings), [`Progressive`] (one iteration at a time into the film and the
-//! technique images), [`run_budget`] (stepping until the budget, checkpointing). [`render`] runs
+//! technique images), [`run_budget`] (stepping until the budget, checkpointing). [`render()`] runs
 //! them to the end and writes the files; [`Live`] owns a prepared session and steps it when
 //! asked (the Python module's `Session`).
 

@@ -40,12 +40,12 @@ pub fn render(request: &Request, stop: Option<&AtomicBool>, observer: &mut dyn O
     render_on(request, stop, observer, None)
 }
 
-/// [`render`], spread over the ranks of `ranks` when given ([`render::distributed`]): every
+/// [`render()`], spread over the ranks of `ranks` when given ([`render::distributed`]): every
 /// rank calls it with the same request (all ranks parse the same command line, so their
 /// settings cannot differ). Every rank loads the scene; a load error on any rank is every
 /// rank's error. Rank 0 keeps the film, writes the outputs and checkpoints and composes the
 /// summary; on the other ranks the outcome's film is empty and nothing is written. `stop` on
-/// any rank stops every rank after the current round. The image equals [`render`]'s bit for
+/// any rank stops every rank after the current round. The image equals [`render()`]'s bit for
 /// bit.
 pub fn render_on(
     request: &Request,

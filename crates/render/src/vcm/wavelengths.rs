@@ -15,7 +15,7 @@
 //! **The sets.** Without fluorescence the set of group `k` in iteration `n` has the primary
 //! samples `(k + ξ_n)/(4K) + (h_k + j)/4`, `j = 0…3`, the hero's quarter `h_k ∈ {0…3}` drawn
 //! per group and iteration (so the hero, which alone survives a dispersive event, is not always
-//! the shortest wavelength of its set), and the offset `ξ_n` of [`group_offset`]: uniform in
+//! the shortest wavelength of its set), and the offset `ξ_n` of `group_offset`: uniform in
 //! every iteration, a golden-ratio sequence over blocks of K iterations. With fluorescence
 //! (paired sets, see [`spectrum::Wavelengths4`]) the two pairs start at
 //! `u_k = (k + ξ_n)/(2K) + h_k/2` and `v_k = (π(k) + ξ')/(2K) + h'_k/2`, `π` a random

@@ -192,7 +192,7 @@ impl EnvMapLight {
         self.evaluate(direction).0
     }
 
-    /// Density per steradian with which [`Light::sample_direct`] picks `direction`.
+    /// Density per steradian with which [`Light::sample_direct`](super::Light::sample_direct) picks `direction`.
     pub fn pdf(&self, direction: Vec3) -> f32 {
         self.evaluate(direction).1
     }

@@ -85,7 +85,7 @@ impl GoniometricLight {
     }
 
     /// Intensity (W/sr per channel) along the unit world direction `direction`, and the
-    /// solid-angle density with which [`GoniometricLight::sample_emission`] emits along it.
+    /// solid-angle density with which `GoniometricLight::sample_emission` emits along it.
     pub fn emitted(&self, direction: Vec3) -> (Rgb, f32) {
         let Some(distribution) = &self.distribution else { return (Rgb::BLACK, 0.0) };
         let s = equal_area::sphere_to_square(self.frame.to_local(direction)).clamp(Vec2::ZERO, Vec2::ONE);

@@ -198,7 +198,7 @@ impl ProjectorLight {
         }
     }
 
-    /// Solid-angle density with which [`ProjectorLight::sample_emission`] emits along the
+    /// Solid-angle density with which `ProjectorLight::sample_emission` emits along the
     /// unit world direction `direction` (0 outside the image).
     pub fn emission_pdf(&self, direction: Vec3) -> f32 {
         self.emitted(self.frame.to_local(direction)).map_or(0.0, |(_, pdf)| pdf)

@@ -91,7 +91,7 @@ impl BsdfSample {
 
     /// True for a specular sample that continues in the direction the ray arrived in, i.e.
     /// along `-fixed` (`fixed`: the unit direction back along the arriving ray), within
-    /// [`STRAIGHT_THROUGH_COS`]: a thin dielectric's transmission, or a refraction between
+    /// `STRAIGHT_THROUGH_COS`: a thin dielectric's transmission, or a refraction between
     /// equal indices. Mitsuba 3 gives its thin dielectric's transmission a *null* component,
     /// which its volumetric path tracers do not count as a bounce; ours (pt and the VCM
     /// engine, in scenes with media) follow it with this test.
