@@ -628,32 +628,34 @@ impl HashGrid {
         // bits 0 and 1 of every coordinate: cells whose coordinates differ by 1 or 2 on some
         // axis never share a bucket. So when every axis spans at most two cells (the normal
         // case) the buckets are distinct, and each 4×4×4 block's hash is computed once.
-        let narrow = cells.iter().all(|&(first, last)| last - first <= 1);
-        if !(narrow && map.bucket_mask >= 63) {
+        let [(x0, x1), (y0, y1), (z0, z1)] = cells;
+        if x1 - x0 > 1 || y1 - y0 > 1 || z1 - z0 > 1 || map.bucket_mask < 63 {
             return GridQuery::General;
         }
         let mut ids = [0u32; 8];
         let mut count = 0;
-        let [(x0, x1), (y0, y1), (z0, z1)] = cells;
         let (bx0, bx1) = (x0 >> 2, x1 >> 2);
-        let mut row: Option<(u32, u32, u32, u32)> = None;
-        for z in z0..=z1 {
-            for y in y0..=y1 {
+        let (low_x0, low_x1) = (morton_low(x0), morton_low(x1));
+        // The cells' (y, z) rows in query order (z outer, y inner), over slices rather than
+        // `RangeInclusive`s (scene 1 `vcm`, 256², two iterations: 3,081 M → 3,059 M
+        // instructions, images identical).
+        let (ys, zs) = ([y0, y1], [z0, z1]);
+        let (rows_y, rows_z) = (1 + usize::from(y1 != y0), 1 + usize::from(z1 != z0));
+        // The block hashes of the last row's (y, z) block; no block has coordinate `u32::MAX`.
+        let mut row = (u32::MAX, u32::MAX, 0, 0);
+        for &z in &zs[..rows_z] {
+            for &y in &ys[..rows_y] {
                 let (by, bz) = (y >> 2, z >> 2);
-                let (h0, h1) = match row {
-                    Some((ry, rz, h0, h1)) if (ry, rz) == (by, bz) => (h0, h1),
-                    _ => {
-                        let h0 = block_hash(bx0, by, bz);
-                        let h1 = if bx1 == bx0 { h0 } else { block_hash(bx1, by, bz) };
-                        row = Some((by, bz, h0, h1));
-                        (h0, h1)
-                    }
-                };
+                if (row.0, row.1) != (by, bz) {
+                    let h0 = block_hash(bx0, by, bz);
+                    let h1 = if bx1 == bx0 { h0 } else { block_hash(bx1, by, bz) };
+                    row = (by, bz, h0, h1);
+                }
                 let low_yz = morton_low(y) << 1 | morton_low(z) << 2;
-                ids[count] = (h0 << 6 | morton_low(x0) | low_yz) & map.bucket_mask;
+                ids[count] = (row.2 << 6 | low_x0 | low_yz) & map.bucket_mask;
                 count += 1;
                 if x1 != x0 {
-                    ids[count] = (h1 << 6 | morton_low(x1) | low_yz) & map.bucket_mask;
+                    ids[count] = (row.3 << 6 | low_x1 | low_yz) & map.bucket_mask;
                     count += 1;
                 }
             }
