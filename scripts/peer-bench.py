@@ -181,6 +181,34 @@ def mitsuba_render(mi, scene, spp, seed, output):
     return seconds
 
 
+def equal_time(vcm, mi, scene, reference, budget, algorithms, names):
+    """Mitsuba `path` renders the loaded scene `scene = (scene, path)` with `budget = (spp, seeds)`;
+    each of our `algorithms` renders the file for Mitsuba's median time. Returns the table rows
+    (renderer, budget, mean seconds, mean relMSE against `reference`) and Mitsuba's images.
+    `names` = (scratch folder, name in the log)."""
+    (loaded, path), (spp, seeds), (folder, name) = scene, budget, names
+    times, errors, outputs = [], [], []
+    for seed in range(seeds):
+        outputs.append(scratch(folder, f"mitsuba-{seed}.exr"))
+        times.append(mitsuba_render(mi, loaded, spp, seed, outputs[-1]))
+        errors.append(rel_mse(vcm, outputs[-1], reference))
+    seconds = statistics.median(times)
+    log(f"{name}: Mitsuba path {spp} spp in {seconds:.2f} s, relMSE {statistics.mean(errors):.3g}")
+    rows = [("Mitsuba 3 `path`", f"{spp} spp", seconds, statistics.mean(errors))]
+    for algorithm in algorithms:
+        ours_times, ours_errors = [], []
+        for seed in range(seeds):
+            output = scratch(folder, f"{algorithm}-{seed}.exr")
+            taken, _ = vcm_render(vcm, ["--scene", path, "-a", algorithm, "-t", f"{seconds:.3f}", "--seed", str(seed),
+                                        "--quiet"], output)
+            ours_times.append(taken)
+            ours_errors.append(rel_mse(vcm, output, reference))
+        rows.append((f"ours `{algorithm}`", f"`-t {seconds:.2f}`", statistics.mean(ours_times),
+                     statistics.mean(ours_errors)))
+        log(f"{name}: ours {algorithm} relMSE {statistics.mean(ours_errors):.3g}")
+    return rows, outputs
+
+
 def mitsuba_cornell(vcm, settings):
     mi = llvm_variant()
     folder = os.path.join(SHARED, "cornell-box")
@@ -191,25 +219,7 @@ def mitsuba_cornell(vcm, settings):
     scene = mi.load_file(path)
     spp, seeds = settings["cornell_spp"], settings["seeds"]
     mitsuba_render(mi, scene, spp, 1000, scratch("cornell", "warmup.exr"))  # JIT compilation
-    times, errors = [], []
-    for seed in range(seeds):
-        output = scratch("cornell", f"mitsuba-{seed}.exr")
-        times.append(mitsuba_render(mi, scene, spp, seed, output))
-        errors.append(rel_mse(vcm, output, reference))
-    budget = statistics.median(times)
-    log(f"Cornell box: Mitsuba path {spp} spp in {budget:.2f} s, relMSE {statistics.mean(errors):.3g}")
-    rows = [("Mitsuba 3 `path`", f"{spp} spp", budget, statistics.mean(errors))]
-    for algorithm in ALGORITHMS:
-        ours_times, ours_errors = [], []
-        for seed in range(seeds):
-            output = scratch("cornell", f"{algorithm}-{seed}.exr")
-            seconds, _ = vcm_render(vcm, ["--scene", path, "-a", algorithm, "-t", f"{budget:.3f}", "--seed", str(seed),
-                                          "--quiet"], output)
-            ours_times.append(seconds)
-            ours_errors.append(rel_mse(vcm, output, reference))
-        rows.append((f"ours `{algorithm}`", f"`-t {budget:.2f}`", statistics.mean(ours_times),
-                     statistics.mean(ours_errors)))
-        log(f"Cornell box: ours {algorithm} relMSE {statistics.mean(ours_errors):.3g}")
+    rows, _ = equal_time(vcm, mi, (scene, path), reference, (spp, seeds), ALGORITHMS, ("cornell", "Cornell box"))
     return rows
 
 
@@ -267,25 +277,8 @@ def mitsuba_caustic(vcm, settings):
     scene = mi.load_file(path)
     spp, seeds = settings["caustic_spp"], settings["seeds"]
     mitsuba_render(mi, scene, spp, 1000, scratch("caustic", "warmup.exr"))  # JIT compilation
-    times, errors, outputs = [], [], []
-    for seed in range(seeds):
-        outputs.append(scratch("caustic", f"mitsuba-{seed}.exr"))
-        times.append(mitsuba_render(mi, scene, spp, seed, outputs[-1]))
-        errors.append(rel_mse(vcm, outputs[-1], reference))
-    budget = statistics.median(times)
-    log(f"caustic box: Mitsuba path {spp} spp in {budget:.2f} s, relMSE {statistics.mean(errors):.3g}")
-    rows = [("Mitsuba 3 `path`", f"{spp} spp", budget, statistics.mean(errors))]
-    for algorithm in ("pt", "bpt", "vcm"):
-        ours_times, ours_errors = [], []
-        for seed in range(seeds):
-            output = scratch("caustic", f"{algorithm}-{seed}.exr")
-            seconds, _ = vcm_render(vcm, ["--scene", path, "-a", algorithm, "-t", f"{budget:.3f}", "--seed", str(seed),
-                                          "--quiet"], output)
-            ours_times.append(seconds)
-            ours_errors.append(rel_mse(vcm, output, reference))
-        rows.append((f"ours `{algorithm}`", f"`-t {budget:.2f}`", statistics.mean(ours_times),
-                     statistics.mean(ours_errors)))
-        log(f"caustic box: ours {algorithm} relMSE {statistics.mean(ours_errors):.3g}")
+    rows, outputs = equal_time(vcm, mi, (scene, path), reference, (spp, seeds), ["pt", "bpt", "vcm"],
+                               ("caustic", "caustic box"))
     agreement = [m / r for m, r in zip(channel_means(mi, outputs), channel_means(mi, [reference]))]
     side_by_side(mi, [outputs[0], scratch("caustic", "vcm-0.exr")], scratch("caustic", "equal-time.jpg"))
     return rows, agreement
