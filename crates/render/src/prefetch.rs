@@ -8,8 +8,9 @@
 //! the hit (bucket starts), after next-event estimation (the first records of each bucket) and
 //! at the start of a camera path (the vertices of the pixel's light sub-path), it takes 13, 7,
 //! 7 and 3 % off the VCM iteration on SmallVCM's scenes 0–3 (medians of paired runs,
-//! docs/performance.md, "Prefetching the merge queries"). That measurement is what the exception to the workspace's `unsafe_code = "deny"`
-//! rests on; `.ci/run` checks that no other file allows `unsafe_code`.
+//! docs/performance.md, "Prefetching the merge queries"). That measurement is what the
+//! exception to the workspace's `unsafe_code = "deny"` rests on; `.ci/run` checks that no other
+//! file allows `unsafe_code`.
 
 /// Asks the processor to bring the cache line that holds `item` into every cache level.
 ///

@@ -114,8 +114,6 @@ impl Builder {
         self.warn_unused(p);
         Ok(())
     }
-
-    // ----- parameters: spectra and textures -------------------------------------------------
 }
 
 /// The world-space camera for a film of `width × height`.

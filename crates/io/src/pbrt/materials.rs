@@ -1,4 +1,5 @@
-//! Materials: `Material`, `MakeNamedMaterial` and their parameters (roughness, index of refraction, normal and bump maps, hair).
+//! Materials: `Material`, `MakeNamedMaterial` and their parameters (roughness, index of
+//! refraction, normal and bump maps, hair).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -313,8 +314,8 @@ impl Builder {
         Ok(eta)
     }
 
-    // ----- shapes ---------------------------------------------------------------------------
-
+    /// The material of the shape being defined: the graphics state's, else the file's default
+    /// (pbrt's `diffuse`, created on first use).
     pub(super) fn current_material(&mut self) -> u32 {
         if let Some(m) = self.state.material {
             return m;

@@ -6,9 +6,9 @@
 //! - **Coordinates.** pbrt's numbers are used as they are; its "left-handed" system only
 //!   changes how a picture is drawn, not a formula. The camera looks along its +z with +y up
 //!   and +x to the right of the image. The transformation at `Camera` is camera-from-world;
-//!   the [`CameraDesc`](scene::desc::CameraDesc) gets the world-space images of the camera's origin and axes (so a
-//!   `LookAt` without `Scale -1 1 1` gives the mirror image of the same `lookat` in Mitsuba,
-//!   exactly as in the two renderers).
+//!   the [`CameraDesc`](scene::desc::CameraDesc) gets the world-space images of the camera's
+//!   origin and axes (so a `LookAt` without `Scale -1 1 1` gives the mirror image of the same
+//!   `lookat` in Mitsuba, exactly as in the two renderers).
 //! - **Field of view.** pbrt's `fov` spans the shorter image axis; we convert it to the
 //!   horizontal field of view for the film's aspect ratio (square pixels).
 //! - **Path length.** pbrt's `maxdepth` counts bounces (0 = only emitters seen directly), so the
@@ -49,8 +49,8 @@
 //!   `medium.rs`); grid media are errors.
 //! - **Unsupported** features are errors naming them (grid media, textures other
 //!   than `imagemap`/`checkerboard`/`constant`/`scale`/`mix`, `measured`, `subsurface`, …);
-//!   the layered `coateddiffuse` and `coatedconductor` are in `coated.rs`; `hair` is here and
-//!   `curve` shapes (tessellated into tubes) in `curve.rs`;
+//!   the layered `coateddiffuse` and `coatedconductor` are in `coated.rs`; `hair` is in
+//!   `materials.rs` and `curve` shapes (tessellated into tubes) in `curve.rs`;
 //!   unsupported optional parameters are warnings in [`SceneDescription::warnings`].
 //!
 //! # Files
@@ -541,8 +541,6 @@ impl Builder {
             media: self.media.finish(),
         })
     }
-
-    // ----- camera, film, filter -------------------------------------------------------------
 }
 
 /// A path named in `file`, relative to its directory unless absolute.

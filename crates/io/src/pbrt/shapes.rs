@@ -214,8 +214,6 @@ impl Builder {
         mesh.validate().map_err(|e| err(file, pos, e))?;
         Ok(mesh)
     }
-
-    // ----- lights ---------------------------------------------------------------------------
 }
 
 /// pbrt's `loopsubdiv` shape (`integer levels`, default 3; `integer indices`; `point3 P`)

@@ -269,6 +269,4 @@ impl Builder {
         self.textures.insert(name, NamedTexture { texture });
         Ok(())
     }
-
-    // ----- materials ------------------------------------------------------------------------
 }

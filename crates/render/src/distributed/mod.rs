@@ -5,8 +5,9 @@
 //! ranks can render any iterations; the film's f64 sums depend on the order of addition, so
 //! rank 0 adds every iteration in index order. In round k, rank r renders iteration
 //! `base + r` (base = first index of the round, advancing by the rank count) when the budget
-//! allows, sends its [`IterationResult`](crate::progressive::IterationResult) (or none) with its stop flag to rank 0, which adds
-//! them in rank order — the order of one process — and broadcasts whether to continue.
+//! allows, sends its [`IterationResult`](crate::progressive::IterationResult) (or none) with
+//! its stop flag to rank 0, which adds them in rank order — the order of one process — and
+//! broadcasts whether to continue.
 //!
 //! The transport is the [`Collective`] trait, with no MPI dependency here: the command line's
 //! `mpi` feature implements it over MPI, [`LocalRanks`] over threads and channels (tests).
