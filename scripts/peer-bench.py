@@ -223,12 +223,18 @@ def mitsuba_cornell(vcm, settings):
     return rows
 
 
+def image_stack(mi, paths):
+    """The RGB channels of the images at `paths`, stacked: (images, height, width, 3), float64."""
+    import numpy as np
+
+    return np.stack([np.array(mi.Bitmap(p), dtype=np.float64)[..., :3] for p in paths])
+
+
 def variance_across(mi, paths):
     """Mean over pixels and channels of the per-pixel sample variance across images."""
     import numpy as np
 
-    stack = np.stack([np.array(mi.Bitmap(p), dtype=np.float64)[..., :3] for p in paths])
-    return float(np.mean(np.var(stack, axis=0, ddof=1)))
+    return float(np.mean(np.var(image_stack(mi, paths), axis=0, ddof=1)))
 
 
 def mitsuba_matpreview(vcm, settings):
@@ -259,8 +265,7 @@ def channel_means(mi, paths):
     """Per-channel means (R, G, B) of the average of the images at `paths`."""
     import numpy as np
 
-    stack = np.stack([np.array(mi.Bitmap(p), dtype=np.float64)[..., :3] for p in paths])
-    return [float(m) for m in np.mean(stack, axis=(0, 1, 2))]
+    return [float(m) for m in np.mean(image_stack(mi, paths), axis=(0, 1, 2))]
 
 
 def mitsuba_caustic(vcm, settings):
@@ -288,8 +293,8 @@ def side_by_side(mi, paths, output):
     """Writes the images at `paths` side by side as an sRGB JPEG (clamped, no exposure change)."""
     import numpy as np
 
-    images = [np.array(mi.Bitmap(p), dtype=np.float32)[..., :3] for p in paths]
-    gap = np.ones((images[0].shape[0], 4, 3), dtype=np.float32)
+    images = image_stack(mi, paths)
+    gap = np.ones((images.shape[1], 4, 3))
     row = np.concatenate([x for image in images for x in (image, gap)][:-1], axis=1)
     bitmap = mi.Bitmap(np.clip(row, 0.0, 1.0)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, srgb_gamma=True)
     bitmap.write(output, quality=90)
@@ -443,11 +448,9 @@ def main():
         except Skip as reason:
             skipped.append(f"{name}: SKIPPED: {reason}")
     helpers = perf_tables()
+    peers = tables(results, settings, commands, helpers.stamp) if args.only != "caustic" else None
     caustic = caustic_table(results, settings, commands, helpers.stamp) if "caustic" in results else None
-    if args.only == "caustic":
-        text = caustic or ""
-    else:
-        text = tables(results, settings, commands, helpers.stamp) + ("\n\n" + caustic if caustic else "")
+    text = "\n\n".join(t for t in (peers, caustic) if t)
     if skipped:
         text += "\n\n" + "\n".join(f"- {s}" for s in skipped)
     print(text)
@@ -460,7 +463,7 @@ def main():
         # The peers table holds the Mitsuba and SmallVCM parts together: only a run of both
         # rewrites it. The caustic table has a block of its own.
         if args.only is None:
-            helpers.replace_between("docs/performance.md", "peers", tables(results, settings, commands, helpers.stamp))
+            helpers.replace_between("docs/performance.md", "peers", peers)
         if caustic:
             helpers.replace_between("docs/performance.md", "peers-caustic", caustic)
             shutil.copyfile(scratch("caustic", "equal-time.jpg"), os.path.join("docs", "images", "caustic-equal-time.jpg"))
