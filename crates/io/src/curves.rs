@@ -298,8 +298,7 @@ mod tests {
 
     #[test]
     fn curve_files_are_read_and_checked() {
-        let dir = std::env::temp_dir().join(format!("vcm-curves-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = testkit::TempDir::new("curves");
         let path = dir.join("c.txt");
         std::fs::write(&path, "0 0 0 1\n1 0 0 1\n\n\n0 1 0 0.5\n0 2 0 0.5\n0 3 0 0.5\n").unwrap();
         let curves = read_curves(&path, Basis::Linear).unwrap();
@@ -311,6 +310,5 @@ mod tests {
         assert!(e.contains("c.txt:2: expected four numbers"), "{e}");
         std::fs::write(&path, "0 0 0 -1\n1 0 0 1\n").unwrap();
         assert!(read_curves(&path, Basis::Linear).unwrap_err().contains("c.txt:1: negative radius"));
-        std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -52,12 +52,10 @@ pub fn load_scene_traced(
 mod tests {
     use super::*;
     use crate::{Image, WriteOptions, write_image};
+    use testkit::TempDir;
 
-    fn scratch(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("vcm-trace-test-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    fn scratch(name: &str) -> TempDir {
+        TempDir::new(&format!("trace-test-{name}"))
     }
 
     fn write_pixel_image(path: &Path) {
@@ -96,7 +94,6 @@ mod tests {
         // Outside a traced load nothing is recorded.
         crate::load_scene(&main, &[]).unwrap();
         assert!(OPENED.with(|o| o.borrow().is_none()));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
@@ -121,6 +118,5 @@ mod tests {
         // A failed load still ends the recording.
         assert!(load_scene_traced(&dir.join("absent.pbrt"), &[], &Default::default()).is_err());
         assert!(OPENED.with(|o| o.borrow().is_none()));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -5,7 +5,6 @@
 //! an identity normal map must render the plain material's image.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use io::mitsuba::load;
 use io::{Image, SceneError, WriteOptions, write_image};
@@ -14,17 +13,7 @@ use render::{Algorithm, RenderSettings};
 use scene::Scene;
 use scene::desc::SceneDescription;
 use scene::material::Material;
-use testkit::{MeanVar, sidak, z_test_p};
-
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
-
-fn temp_dir() -> PathBuf {
-    let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let dir = std::env::temp_dir().join(format!("vcm-bsdf-maps-{}-{n}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use testkit::{MeanVar, TempDir, sidak, z_test_p};
 
 fn load_in(dir: &Path, body: &str) -> Result<SceneDescription, (SceneError, PathBuf)> {
     let path = dir.join("scene.xml");
@@ -33,12 +22,13 @@ fn load_in(dir: &Path, body: &str) -> Result<SceneDescription, (SceneError, Path
 }
 
 fn load_ok(body: &str) -> SceneDescription {
-    load_in(&temp_dir(), body).unwrap_or_else(|(e, _)| panic!("{e}"))
+    load_in(&TempDir::new("bsdf-maps"), body).unwrap_or_else(|(e, _)| panic!("{e}"))
 }
 
 /// Asserts the error is at `line` (the body starts on line 2) and mentions every needle.
 fn load_error(body: &str, line: u32, needles: &[&str]) {
-    let (e, path) = match load_in(&temp_dir(), body) {
+    let dir = TempDir::new("bsdf-maps");
+    let (e, path) = match load_in(&dir, body) {
         Ok(_) => panic!("expected an error for\n{body}"),
         Err(x) => x,
     };
@@ -186,7 +176,7 @@ fn identity_normal_map_renders_the_plain_image() {
 /// the shadowed ones the unshadowed value.
 #[test]
 fn tilted_planes_reflect_the_sky_view_factor() {
-    let dir = temp_dir();
+    let dir = TempDir::new("bsdf-maps");
     // A 64 × 1 ramp h(u) = u (texel centres), clamped: over the rectangle (u across 20 units)
     // a bump scale of 20 gives ∂h/∂u · scale / |∂p/∂u| = 1, a 45° tilt; the camera sees
     // u ∈ [0.43, 0.57], far from the clamped edges.
@@ -230,7 +220,7 @@ fn tilted_planes_reflect_the_sky_view_factor() {
 /// 20 × 20 quad with uv over [0, 1]² under a unit constant sky, against `ρ (1 + cos a)/2`.
 #[test]
 fn pbrt_normal_map_and_displacement_tilt_the_plane() {
-    let dir = temp_dir();
+    let dir = TempDir::new("bsdf-maps");
     // One texel encoding the normal tilted by 0.8 rad about v.
     let a = 0.8f32;
     let texel = [0.5 + 0.5 * a.sin(), 0.5, 0.5 + 0.5 * a.cos()];
@@ -325,7 +315,7 @@ fn textured_roughness_loads() {
         &["both 'alpha_u' and 'alpha_v'"],
     );
 
-    let dir = temp_dir();
+    let dir = TempDir::new("bsdf-maps");
     let path = dir.join("rough.pbrt");
     std::fs::write(
         &path,

@@ -4,7 +4,6 @@
 //! directly seen spectral emitter renders, in expectation, exactly the colour of its spectrum.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use io::SceneError;
 use io::mitsuba::{load, tabulated_spectrum_to_rgb, xyz_to_linear_srgb};
@@ -14,22 +13,19 @@ use scene::Scene;
 use scene::desc::{EmissionSpectrum, SceneDescription};
 use scene::material::Material;
 use spectrum::Rgb;
-use testkit::{MeanVar, sidak, z_test_p};
+use testkit::{MeanVar, TempDir, sidak, z_test_p};
 
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
-
-fn write_scene(body: &str, extension: &str) -> PathBuf {
-    let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let dir = std::env::temp_dir().join(format!("vcm-emitter-spectra-{}-{n}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+/// Writes `body` to `scene.{extension}` in a fresh directory; returns the directory's guard
+/// (keep it while the file is used) and the file's path.
+fn write_scene(body: &str, extension: &str) -> (TempDir, PathBuf) {
+    let dir = TempDir::new("emitter-spectra");
     let path = dir.join(format!("scene.{extension}"));
     std::fs::write(&path, body).unwrap();
-    path
+    (dir, path)
 }
 
 fn mitsuba(body: &str) -> Result<SceneDescription, (SceneError, PathBuf)> {
-    let path = write_scene(&format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n"), "xml");
+    let (_dir, path) = write_scene(&format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n"), "xml");
     load(&path, &[]).map_err(|e| (e, path))
 }
 
@@ -230,7 +226,7 @@ fn fluorescent_bands_of_two_materials_must_not_overlap() {
 
 #[test]
 fn pbrt_blackbody_and_sampled_lights_keep_a_unit_luminance_spectrum() {
-    let path = write_scene(
+    let (_dir, path) = write_scene(
         "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\n\
          AttributeBegin\nAreaLightSource \"diffuse\" \"blackbody L\" [3000] \"float scale\" 2\n\
          Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n\

@@ -3,17 +3,15 @@
 //! volumes, pbrt-v4's `uniformgrid`; the `.vol` → world mapping checked by evaluating the
 //! loaded medium at world points; errors naming the file and line.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use scene::desc::SceneDescription;
 use scene::medium::Medium;
 use spectrum::Rgb;
+use testkit::TempDir;
 
-fn dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vcm-hetero-test-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn dir(test: &str) -> TempDir {
+    TempDir::new(&format!("hetero-test-{test}"))
 }
 
 /// A `.vol` file of `channels` values per point on `dims` points with the given bounds.
@@ -150,7 +148,8 @@ fn mitsuba_grid_errors_name_file_and_line() {
 }
 
 fn pbrt(test: &str, text: &str) -> Result<SceneDescription, String> {
-    let path = dir(test).join("scene.pbrt");
+    let dir = dir(test);
+    let path = dir.join("scene.pbrt");
     std::fs::write(&path, text).unwrap();
     io::pbrt::load(&path).map_err(|e| e.to_string())
 }

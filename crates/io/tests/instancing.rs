@@ -6,24 +6,27 @@ use std::path::PathBuf;
 
 use math::Vec3;
 use scene::desc::{Geometry, SceneDescription};
+use testkit::TempDir;
 
-fn write(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vcm-instancing-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+/// Writes `text` to a scene file in a fresh directory; returns the directory's guard (keep it
+/// while the file is used) and the file's path.
+fn write(name: &str, text: &str) -> (TempDir, PathBuf) {
+    let dir = TempDir::new(&format!("instancing-test-{name}"));
     let file = dir.join(if text.contains("WorldBegin") { "scene.pbrt" } else { "scene.xml" });
     std::fs::write(&file, text).unwrap();
-    file
+    (dir, file)
 }
 
 fn mitsuba(name: &str, body: &str) -> Result<SceneDescription, String> {
     let text = format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n");
-    io::mitsuba::load(&write(name, &text), &[]).map_err(|e| e.to_string())
+    let (_dir, path) = write(name, &text);
+    io::mitsuba::load(&path, &[]).map_err(|e| e.to_string())
 }
 
 fn pbrt(name: &str, body: &str) -> Result<SceneDescription, String> {
     let text = format!("Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\n{body}\n");
-    io::pbrt::load(&write(name, &text)).map_err(|e| e.to_string())
+    let (_dir, path) = write(name, &text);
+    io::pbrt::load(&path).map_err(|e| e.to_string())
 }
 
 fn close(a: Vec3, b: Vec3) -> bool {

@@ -5,13 +5,11 @@
 //! triangles, left its spot lights 3 % of the next-event samples).
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use io::mitsuba::load;
 use math::PI;
 use scene::Scene;
-
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
+use testkit::TempDir;
 
 /// A z = 0 unit square, split into `n × n` quads (2 n² triangles) facing +z, as OBJ text.
 fn grid_obj(n: usize) -> String {
@@ -34,10 +32,7 @@ fn grid_obj(n: usize) -> String {
 /// A scene with an emitting square of `n × n` quads (radiance 1, area 1, 2 m above the floor)
 /// and a point light of intensity 1; returns the scene and the point light's index.
 fn scene_with_grid(n: usize) -> (Scene, u32) {
-    let k = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let dir = std::env::temp_dir().join(format!("vcm-light-selection-{}-{k}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = TempDir::new("light-selection");
     std::fs::write(dir.join("grid.obj"), grid_obj(n)).unwrap();
     let path: PathBuf = dir.join("scene.xml");
     std::fs::write(

@@ -8,23 +8,24 @@ use std::path::PathBuf;
 use scene::desc::SceneDescription;
 use scene::medium::{Coefficients, MediumInterface, PhaseFunction};
 use spectrum::Rgb;
+use testkit::TempDir;
 
-fn write(test: &str, name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vcm-media-test-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+/// Writes `text` to `name` in a fresh directory; returns the directory's guard (keep it while
+/// the file is used) and the file's path.
+fn write(test: &str, name: &str, text: &str) -> (TempDir, PathBuf) {
+    let dir = TempDir::new(&format!("media-test-{test}"));
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
-    path
+    (dir, path)
 }
 
 fn mitsuba(test: &str, body: &str) -> Result<SceneDescription, String> {
-    let path = write(test, "scene.xml", &format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n"));
+    let (_dir, path) = write(test, "scene.xml", &format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n"));
     io::mitsuba::load(&path, &[]).map_err(|e| e.to_string())
 }
 
 fn pbrt(test: &str, text: &str) -> Result<SceneDescription, String> {
-    let path = write(test, "scene.pbrt", text);
+    let (_dir, path) = write(test, "scene.pbrt", text);
     io::pbrt::load(&path).map_err(|e| e.to_string())
 }
 

@@ -3,7 +3,6 @@
 //! `.ci/run` runs them where `../shared` is present).
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use io::mitsuba::{load, tabulated_spectrum_to_rgb, xyz_to_linear_srgb};
 use io::{Image, SceneError, WriteOptions, write_image};
@@ -13,16 +12,11 @@ use scene::desc::{FilterDesc, Geometry, LightDesc, MeshData, Projection, SceneDe
 use scene::material::Material;
 use scene::microfacet::Distribution;
 use spectrum::Rgb;
+use testkit::TempDir;
 
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
-
-/// A fresh empty directory under the system temp dir.
-fn temp_dir() -> PathBuf {
-    let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let dir = std::env::temp_dir().join(format!("vcm-mitsuba-test-{}-{n}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh empty directory under the system temp dir, removed when the guard is dropped.
+fn temp_dir() -> TempDir {
+    TempDir::new("mitsuba-test")
 }
 
 fn write(dir: &Path, name: &str, contents: &str) -> PathBuf {

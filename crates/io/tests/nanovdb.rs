@@ -14,26 +14,22 @@
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use io::nanovdb::NanoVdbFile;
 use math::rng::Rng;
 use scene::desc::SceneDescription;
 use scene::medium::Medium;
 use spectrum::Rgb;
-
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
+use testkit::TempDir;
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/nanovdb").join(name)
 }
 
-/// A fresh directory holding copies of the fixtures, `ramp.nvdb` gunzipped.
-fn fixtures() -> PathBuf {
-    let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let dir = std::env::temp_dir().join(format!("vcm-nanovdb-test-{}-{n}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+/// A fresh directory holding copies of the fixtures, `ramp.nvdb` gunzipped; removed when the
+/// guard is dropped.
+fn fixtures() -> TempDir {
+    let dir = TempDir::new("nanovdb-test");
     for f in ["ramp-zip.nvdb", "fire.nvdb", "background.nvdb", "double.nvdb", "levelset.nvdb"] {
         std::fs::copy(data(f), dir.join(f)).unwrap();
     }
@@ -107,7 +103,8 @@ fn every_voxel_of_the_ramp_matches_its_formula() {
 /// The generator's map: `world = 0.05 · Rz(30°) · Rx(20°) · index + (0.3, −0.2, 0.5)`.
 #[test]
 fn the_index_to_world_map_is_read() {
-    let grid = NanoVdbFile::read(&fixtures().join("ramp.nvdb")).unwrap().float_grid("density").unwrap().unwrap();
+    let dir = fixtures();
+    let grid = NanoVdbFile::read(&dir.join("ramp.nvdb")).unwrap().float_grid("density").unwrap().unwrap();
     let (a, b) = (30f64.to_radians(), 20f64.to_radians());
     let rz = [[a.cos(), -a.sin(), 0.0], [a.sin(), a.cos(), 0.0], [0.0, 0.0, 1.0]];
     let rx = [[1.0, 0.0, 0.0], [0.0, b.cos(), -b.sin()], [0.0, b.sin(), b.cos()]];

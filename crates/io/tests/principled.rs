@@ -5,7 +5,6 @@
 //! image mean.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use io::SceneError;
 use io::mitsuba::load;
@@ -14,14 +13,12 @@ use render::{Algorithm, RenderSettings};
 use scene::desc::SceneDescription;
 use scene::material::Material;
 use scene::{Scene, Texture};
-use testkit::{MeanVar, sidak, z_test_p};
+use testkit::{MeanVar, TempDir, sidak, z_test_p};
 
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
-
+/// Loads `body` from a scene file in a fresh directory, removed before this returns (the error's
+/// path is only compared).
 fn load_body(body: &str) -> Result<SceneDescription, (SceneError, PathBuf)> {
-    let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let dir = std::env::temp_dir().join(format!("vcm-principled-{}-{n}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = TempDir::new("principled");
     let path = dir.join("scene.xml");
     std::fs::write(&path, format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n")).unwrap();
     load(&path, &[]).map_err(|e| (e, path))

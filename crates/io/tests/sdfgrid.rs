@@ -3,17 +3,15 @@
 //! Mitsuba's `test04_ray_intersect` / `test05_ray_intersect_instancing` expect; bad parameters
 //! and bad files are errors naming the file and the position.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use math::{Ray, Vec3};
 use scene::Scene;
 use scene::desc::SceneDescription;
+use testkit::TempDir;
 
-fn dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vcm-sdfgrid-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn dir(name: &str) -> TempDir {
+    TempDir::new(&format!("sdfgrid-test-{name}"))
 }
 
 /// A single-channel `.vol` file: magic, version 3, encoding 1, sizes, channels, bounds, values.

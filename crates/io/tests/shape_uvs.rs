@@ -5,11 +5,10 @@
 use math::{Ray, Vec2, Vec3};
 use scene::Scene;
 use scene::desc::{Geometry, SceneDescription};
+use testkit::TempDir;
 
 fn load(name: &str, body: &str) -> SceneDescription {
-    let dir = std::env::temp_dir().join(format!("vcm-shape-uvs-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = TempDir::new(&format!("shape-uvs-test-{name}"));
     let file = dir.join("scene.xml");
     std::fs::write(&file, format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n")).unwrap();
     io::mitsuba::load(&file, &[]).unwrap()

@@ -2,11 +2,12 @@
 //! the volume scale is the merging scale or the smallest bounded medium, whichever is smaller,
 //! and the global mode shrinks it with the cube root of the pixel count above 512².
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use render::vcm::radius::{MergingScale, smallest_medium_radius};
 use render::vcm::{RadiusMode, VcmAlgorithm, VcmSettings, base_radius, base_volume_radius};
 use scene::Scene;
+use testkit::TempDir;
 
 fn settings(mode: RadiusMode) -> VcmSettings {
     VcmSettings { radius_mode: mode, ..VcmSettings::new(VcmAlgorithm::VertexConnectionMerging) }
@@ -35,13 +36,10 @@ fn scene_with(name: &str, media: &str, resolution: u32) -> Scene {
     {media}
 </scene>"#
     );
-    let dir: PathBuf = std::env::temp_dir().join(format!("vcm-volume-radius-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = TempDir::new("volume-radius");
     let path = dir.join(format!("{name}.xml"));
     std::fs::write(&path, xml).unwrap();
-    let scene = load(&path, resolution);
-    std::fs::remove_file(&path).ok();
-    scene
+    load(&path, resolution)
 }
 
 const FOG: &str = r#"<medium type="homogeneous" id="fog"><rgb name="sigma_t" value="1, 1, 1"/><rgb name="albedo" value="0.5, 0.5, 0.5"/></medium>"#;

@@ -72,13 +72,14 @@ mod tests {
 
     #[test]
     fn materialising_writes_the_text_once_and_rewrites_a_changed_copy() {
-        let folder = std::env::temp_dir().join(format!("vcm-builtin-test-{}", std::process::id()));
+        // A folder that does not exist yet: materialising creates it.
+        let dir = testkit::TempDir::new("builtin-test");
+        let folder = dir.join("scenes");
         let file = find("cornell-fog").unwrap();
         let path = file.materialise(&folder).unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), file.text);
         std::fs::write(&path, "edited").unwrap();
         assert_eq!(file.materialise(&folder).unwrap(), path);
         assert_eq!(std::fs::read_to_string(&path).unwrap(), file.text);
-        std::fs::remove_dir_all(&folder).unwrap();
     }
 }

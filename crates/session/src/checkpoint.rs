@@ -307,11 +307,11 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use testkit::TempDir;
 
     #[test]
     fn round_trip_is_exact_and_bad_files_fail_clearly() {
-        let dir = std::env::temp_dir().join(format!("vcm-checkpoint-test-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = TempDir::new("checkpoint-test");
         let path = dir.join("a.ckpt");
         let mut recorded = Recorded {
             mask: 450,
@@ -384,13 +384,11 @@ mod tests {
         std::fs::write(&path, [header.as_bytes(), &text[header_end..]].concat()).unwrap();
         let (back, film_back) = load(&path).unwrap();
         assert_eq!((back, film_back.sums().to_vec(), film_back.first_iteration()), (recorded, sums, 0));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn fixed_point_slices_round_trip_exactly() {
-        let dir = std::env::temp_dir().join(format!("vcm-checkpoint-fixed-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = TempDir::new("checkpoint-fixed");
         let path = dir.join("part-1.ckpt");
         let slice = Slice { index: 1, count: 3, iterations: 10 };
         let recorded = Recorded {
@@ -427,6 +425,5 @@ mod tests {
         // A film in the other mode than the record is refused.
         let float = Film::new(2, 1);
         assert!(save(&path, &recorded, &float).unwrap_err().to_string().contains("internal error"));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -3,12 +3,13 @@
 //! with another rank count, and ends every rank with the error of a rank that cannot load its
 //! scene.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use render::Algorithm;
 use render::distributed::LocalRanks;
 use render::driver::Budget;
 use session::{Notice, Observer, Outcome, Request};
+use testkit::TempDir;
 
 struct Quiet;
 
@@ -16,10 +17,8 @@ impl Observer for Quiet {
     fn notice(&mut self, _: Notice) {}
 }
 
-fn dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vcm-session-distributed-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn dir(name: &str) -> TempDir {
+    TempDir::new(&format!("session-distributed-{name}"))
 }
 
 fn request(algorithm: &str, iterations: u64, dir: &Path) -> Request {

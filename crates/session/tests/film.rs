@@ -5,6 +5,7 @@ use render::Algorithm;
 use render::driver::Budget;
 use scene::filter::FilmMode;
 use session::{Notice, Observer, Request};
+use testkit::TempDir;
 
 struct Quiet;
 
@@ -24,8 +25,7 @@ fn request() -> Request {
 
 #[test]
 fn checkpoints_record_the_film_mode_and_resuming_with_another_is_an_error() {
-    let dir = std::env::temp_dir().join(format!("vcm-session-film-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = TempDir::new("session-film");
     let checkpoint = dir.join("c.ckpt");
     let first = Request { checkpoint: Some(checkpoint.clone()), film: Some(FilmMode::Splat), ..request() };
     session::render(&first, None, &mut Quiet).unwrap();
@@ -45,5 +45,4 @@ fn checkpoints_record_the_film_mode_and_resuming_with_another_is_an_error() {
             session::render(&Request { budget: Some(Budget::Iterations(3)), ..resumed }, None, &mut Quiet).unwrap();
         assert_eq!(outcome.summary.resumed_after, Some(2));
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -5,6 +5,7 @@
 use render::Algorithm;
 use render::driver::Budget;
 use session::{Notice, Observer, Request};
+use testkit::TempDir;
 
 #[derive(Default)]
 struct Collect {
@@ -71,8 +72,7 @@ fn a_session_renders_in_memory_and_reports_through_the_observer() {
 
 #[test]
 fn a_resumed_session_continues_the_film_exactly() {
-    let dir = std::env::temp_dir().join(format!("vcm-session-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = TempDir::new("session-test");
     let checkpoint = dir.join("c.ckpt");
     let first = Request { checkpoint: Some(checkpoint.clone()), ..request("bpm") };
     session::render(&first, None, &mut Collect::default()).unwrap();
@@ -95,13 +95,11 @@ fn a_resumed_session_continues_the_film_exactly() {
     // Without a variance file, a checkpoint or `keep_variance` the film keeps no squares.
     let lean = session::render(&request("bpm"), None, &mut Collect::default()).unwrap();
     assert!(!lean.output.film.has_variance() && lean.output.film.variance_of_mean().is_none());
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn a_scene_files_sample_count_is_the_default_budget() {
-    let dir = std::env::temp_dir().join(format!("vcm-session-samples-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = TempDir::new("session-samples");
     let scene = dir.join("samples.xml");
     std::fs::write(
         &scene,
@@ -127,5 +125,4 @@ fn a_scene_files_sample_count_is_the_default_budget() {
     // No budget given: the file's three samples per pixel; a given budget wins.
     assert_eq!(render(None), 3);
     assert_eq!(render(Some(Budget::Iterations(2))), 2);
-    std::fs::remove_dir_all(&dir).ok();
 }

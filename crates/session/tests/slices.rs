@@ -12,6 +12,7 @@ use render::driver::Budget;
 use scene::Summation;
 use session::slice::SliceSpec;
 use session::{Notice, Observer, Request};
+use testkit::TempDir;
 
 struct Quiet;
 
@@ -19,11 +20,8 @@ impl Observer for Quiet {
     fn notice(&mut self, _: Notice) {}
 }
 
-fn dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vcm-session-slices-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn dir(name: &str) -> TempDir {
+    TempDir::new(&format!("session-slices-{name}"))
 }
 
 fn request(scene: &str, algorithm: &str, iterations: u64, out: &Path, name: &str) -> Request {

@@ -8,6 +8,7 @@ use render::Algorithm;
 use render::driver::{Budget, Control};
 use render::vcm::technique_images::TechniqueLayout;
 use session::{Live, Notice, Observer, Prepared, Request};
+use testkit::TempDir;
 
 struct Quiet;
 
@@ -28,7 +29,9 @@ fn request(algorithm: &str, scene: &str) -> Request {
 
 #[test]
 fn session_render_equals_the_drivers_render_with() {
-    let dir = std::env::temp_dir().join(format!("vcm-stepping-{}", std::process::id()));
+    // The session creates the technique images' folder itself.
+    let scratch = TempDir::new("stepping");
+    let dir = scratch.join("techniques");
     for (algorithm, spectral, memory_efficient) in [
         ("pt", false, false),
         ("lt", false, false),
@@ -75,7 +78,6 @@ fn session_render_equals_the_drivers_render_with() {
         let other = session::render(&Request { seed: 10, techniques: None, ..r.clone() }, None, &mut Quiet).unwrap();
         assert_ne!(other.output.film.sums(), theirs.film.sums(), "{what}");
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

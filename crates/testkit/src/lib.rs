@@ -8,6 +8,8 @@
 //!   estimates such as two images ([`z_test_entries`]).
 //! - [`mitsuba_maps`]: Mitsuba's normal- and bump-mapped Lambertian surfaces in closed form and
 //!   by quadrature.
+//! - [`temp_dir`]: [`TempDir`], a scratch directory under the system temp dir that is removed
+//!   when the guard is dropped (kept if `VCM_KEEP_TEST_DIRS` is set, to inspect a failing test).
 //!
 //! Every test is deterministic: samplers draw from a [`math::Rng`] seeded by the caller, so a
 //! test that passes once passes always. Choose significance levels (say `1e-3`, Šidák-corrected
@@ -16,9 +18,11 @@
 pub mod chi2;
 pub mod mitsuba_maps;
 pub mod stats;
+pub mod temp_dir;
 
 pub use chi2::{
     Chi2Outcome, Integration, MIN_EXPECTED, PDF_INTEGRAL_TOLERANCE, assert_chi2, chi2_sphere, chi2_sphere_with,
     chi2_square, chi2_square_with,
 };
 pub use stats::{MeanVar, ZTestOutcome, sidak, t_test_p, welch_dof, z_test_entries, z_test_p};
+pub use temp_dir::TempDir;

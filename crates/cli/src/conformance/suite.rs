@@ -94,8 +94,7 @@ mod tests {
 
     #[test]
     fn finds_scenes_and_their_references() {
-        let dir = std::env::temp_dir().join(format!("vcm-suite-discover-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
+        let dir = testkit::TempDir::new("suite-discover");
         std::fs::create_dir_all(dir.join("b_group/refs")).unwrap();
         std::fs::create_dir_all(dir.join("b_group/fragments")).unwrap();
         std::fs::create_dir_all(dir.join("participating_media")).unwrap();
@@ -110,6 +109,5 @@ mod tests {
         assert_eq!(cases[0].reference_variance, dir.join("b_group/refs/test_one_ref_rgb_var.exr"));
         assert_eq!(cases[1].label(), "participating_media/fog");
         assert!(discover(&dir.join("b_group/refs")).is_err());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

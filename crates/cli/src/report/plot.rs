@@ -120,8 +120,7 @@ mod tests {
 
     #[test]
     fn plot_draws_every_series_and_skips_unplottable_points() {
-        let dir = std::env::temp_dir().join(format!("vcm-report-plot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = testkit::TempDir::new("report-plot");
         let path = dir.join("plot.svg");
         let series = vec![
             ("pt", vec![(0.01, 1.0), (0.02, 0.5), (0.04, 0.25)]),
@@ -136,6 +135,5 @@ mod tests {
         assert!(svg.contains("\npt\n") && svg.contains("\nvcm\n") && svg.contains("relative MSE"), "{svg}");
         assert!(!convergence_plot(&dir.join("none.svg"), "test", &[("pt", vec![(0.1, 0.0)])]).unwrap());
         assert!(!dir.join("none.svg").exists());
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }
