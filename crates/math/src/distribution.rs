@@ -6,7 +6,7 @@ use glam::Vec2;
 
 mod alias;
 mod guide;
-pub use alias::AliasTable;
+pub use alias::{AliasRows, AliasTable};
 use guide::Guide;
 
 /// The largest `f32` below 1: continuous samples stay in `[0, 1)`.

@@ -9,16 +9,18 @@ pub mod distribution;
 pub mod frame;
 pub mod octahedral;
 pub mod pdf;
+pub mod prefetch;
 pub mod ray;
 pub mod rng;
 pub mod special;
 pub mod warp;
 
 pub use bounds::Aabb;
-pub use distribution::{AliasTable, Distribution1D, Distribution2D};
+pub use distribution::{AliasRows, AliasTable, Distribution1D, Distribution2D};
 pub use frame::Frame;
 pub use glam::{Vec2, Vec3, Vec3A};
 pub use pdf::{PdfA, PdfW};
+pub use prefetch::prefetch;
 pub use ray::Ray;
 pub use rng::Rng;
 

@@ -20,7 +20,7 @@ pub mod fluorescent;
 pub mod hash_grid;
 mod null_walk;
 pub mod path_tracer;
-pub mod prefetch;
+pub(crate) use math::prefetch;
 pub mod progressive;
 pub mod splat_frame;
 pub mod vcm;

@@ -104,18 +104,36 @@ impl LightTree {
         self.nodes.len()
     }
 
+    /// The infinite light that [`LightTree::sample`] picks for `u` (they are picked first, for
+    /// any receiver), or `None` when `u` falls to the tree's finite lights.
+    #[inline]
+    pub fn pick_infinite(&self, u: f32) -> Option<u32> {
+        self.pick_among_infinite(u).ok().map(|(light, _)| light)
+    }
+
+    /// The infinite light that `u` (clamped into [0, 1)) falls on and its probability, or what
+    /// is left of `u` past their shares.
+    #[inline]
+    fn pick_among_infinite(&self, u: f32) -> Result<(u32, f32), f32> {
+        let mut u = u.clamp(0.0, ONE_MINUS_EPSILON);
+        for &(light, probability) in &self.infinite {
+            if u < probability {
+                return Ok((light, probability));
+            }
+            u -= probability;
+        }
+        Err(u)
+    }
+
     /// Picks a light for a receiver at `p` with unit normal `n` (the zero vector for a point in
     /// a medium: no cosine bound) from one uniform number `u` ∈ [0, 1). Returns the light's
     /// index and its (discrete) probability, which [`LightTree::probability`] reproduces;
     /// `None` when no light can reach `p`.
     pub fn sample(&self, p: Vec3, n: Vec3, u: f32) -> Option<(u32, f32)> {
-        let mut u = u.clamp(0.0, ONE_MINUS_EPSILON);
-        for &(light, probability) in &self.infinite {
-            if u < probability {
-                return Some((light, probability));
-            }
-            u -= probability;
-        }
+        let u = match self.pick_among_infinite(u) {
+            Ok(pick) => return Some(pick),
+            Err(rest) => rest,
+        };
         if self.nodes.is_empty() || self.tree_probability <= 0.0 {
             return None;
         }

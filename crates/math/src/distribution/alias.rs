@@ -69,19 +69,91 @@ impl AliasTable {
     /// entry; it has about `24 − log2 n` bits).
     #[inline]
     pub fn sample_remapped(&self, u: f32) -> (usize, f32) {
-        let n = self.slots.len();
-        let x = u * n as f32;
-        // `as u32` saturates (negatives and NaN give 0).
-        let k = (x as u32).min(n as u32 - 1) as usize;
-        let within = (x - k as f32).clamp(0.0, ONE_BELOW_ONE);
-        let slot = self.slots[k];
-        if within < slot.threshold {
-            (k, (within / slot.threshold).min(ONE_BELOW_ONE))
-        } else {
-            let rest = 1.0 - slot.threshold;
-            let v = if rest > 0.0 { (within - slot.threshold) / rest } else { 0.0 };
-            (slot.alias as usize, v.clamp(0.0, ONE_BELOW_ONE))
+        sample_slots(&self.slots, u)
+    }
+
+    /// The slot that [`AliasTable::sample_remapped`] reads for `u`, and its own entry (the
+    /// answer unless the slot passes `u` on to its alias): for a caller that issues a prefetch
+    /// hint ([`crate::prefetch()`]) for the slot and the entry's data before it samples.
+    #[inline]
+    pub fn slot_of(&self, u: f32) -> (&impl Sized, usize) {
+        let k = slot_index(self.slots.len(), u);
+        (&self.slots[k], k)
+    }
+}
+
+/// One alias table per row of a `rows × width` grid of weights, all slots in one array: a
+/// sample reads its row's slot directly, without first reading the row's own table header (a
+/// dependent load that missed the cache in the environment map's sampling, where the rows are
+/// the map's rows of cells).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AliasRows {
+    width: usize,
+    slots: Vec<Slot>,
+}
+
+impl AliasRows {
+    /// Builds row `r`'s table from `weights[r·width..(r+1)·width]` exactly as
+    /// [`AliasTable::new`] does; a row whose weights are all zero gets a uniform table (it is
+    /// never picked when its row is sampled in proportion to its sum). `None` when `width` is
+    /// 0 or does not divide the number of weights, there are no weights, or a weight is
+    /// negative or not finite.
+    pub fn new(weights: &[f32], width: usize) -> Option<Self> {
+        if width == 0 || weights.is_empty() || !weights.len().is_multiple_of(width) {
+            return None;
         }
+        let mut slots = Vec::with_capacity(weights.len());
+        for row in weights.chunks_exact(width) {
+            let table = match AliasTable::new(row) {
+                Some(table) => table,
+                None if row.iter().all(|w| *w == 0.0) => AliasTable::new(&vec![1.0; width])?,
+                None => return None,
+            };
+            slots.extend(table.slots);
+        }
+        Some(Self { width, slots })
+    }
+
+    /// Entries per row.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// [`AliasTable::sample_remapped`] in row `row`: the entry (a column) and the remapped number.
+    #[inline]
+    pub fn sample_remapped(&self, row: usize, u: f32) -> (usize, f32) {
+        sample_slots(&self.slots[row * self.width..(row + 1) * self.width], u)
+    }
+
+    /// [`AliasTable::slot_of`] in row `row`.
+    #[inline]
+    pub fn slot_of(&self, row: usize, u: f32) -> (&impl Sized, usize) {
+        let k = slot_index(self.width, u);
+        (&self.slots[row * self.width + k], k)
+    }
+}
+
+/// The slot of `n` that `u` falls in. `as u32` saturates (negatives and NaN give 0).
+#[inline]
+fn slot_index(n: usize, u: f32) -> usize {
+    ((u * n as f32) as u32).min(n as u32 - 1) as usize
+}
+
+/// [`AliasTable::sample_remapped`] on a table's slots (not empty).
+#[inline]
+fn sample_slots(slots: &[Slot], u: f32) -> (usize, f32) {
+    let n = slots.len();
+    let x = u * n as f32;
+    // `as u32` saturates (negatives and NaN give 0).
+    let k = (x as u32).min(n as u32 - 1) as usize;
+    let within = (x - k as f32).clamp(0.0, ONE_BELOW_ONE);
+    let slot = slots[k];
+    if within < slot.threshold {
+        (k, (within / slot.threshold).min(ONE_BELOW_ONE))
+    } else {
+        let rest = 1.0 - slot.threshold;
+        let v = if rest > 0.0 { (within - slot.threshold) / rest } else { 0.0 };
+        (slot.alias as usize, v.clamp(0.0, ONE_BELOW_ONE))
     }
 }
 
@@ -160,5 +232,34 @@ mod tests {
         assert_eq!(one.sample_remapped(0.7).0, 0);
         assert_eq!(one.sample_remapped(f32::NAN).0, 0);
         assert_eq!(one.sample_remapped(1.0).0, 0);
+    }
+
+    #[test]
+    fn rows_sample_as_their_own_tables() {
+        // Each row of `AliasRows` answers bit for bit as an `AliasTable` of that row's weights;
+        // an all-zero row as a uniform table.
+        let mut rng = Rng::new(5, 2);
+        let width = 13;
+        let weights: Vec<f32> =
+            (0..width * 6).map(|i| if i / width == 2 || i % 5 == 0 { 0.0 } else { rng.uniform() * 3.0 }).collect();
+        let rows = AliasRows::new(&weights, width).unwrap();
+        assert_eq!(rows.width(), width);
+        for (r, row) in weights.chunks_exact(width).enumerate() {
+            let table = AliasTable::new(row).unwrap_or_else(|| AliasTable::new(&[1.0; 13]).unwrap());
+            for _ in 0..2000 {
+                let u = rng.uniform();
+                let (a, b) = (rows.sample_remapped(r, u), table.sample_remapped(u));
+                assert_eq!((a.0, a.1.to_bits()), (b.0, b.1.to_bits()), "row {r}, u {u}");
+                assert_eq!(rows.slot_of(r, u).1, table.slot_of(u).1);
+            }
+        }
+        // Power check of the comparison: another row's table answers differently.
+        let other = AliasTable::new(&weights[..width]).unwrap();
+        assert!(
+            (0..100).any(|i| other.sample_remapped(i as f32 / 100.0).0 != rows.sample_remapped(1, i as f32 / 100.0).0)
+        );
+        assert!(AliasRows::new(&weights, 0).is_none());
+        assert!(AliasRows::new(&weights[..width + 1], width).is_none());
+        assert!(AliasRows::new(&[1.0, f32::NAN], 2).is_none());
     }
 }

@@ -5,7 +5,7 @@
 
 use math::{RAY_EPSILON, Rng, Vec3};
 use scene::camera::PrimaryDensity;
-use scene::{Bsdf, Scene, TransportMode};
+use scene::{Bsdf, Light, Scene, TransportMode};
 use spectrum::SpectralMode;
 
 use super::connect::{CameraEnd, LightBsdfs, connect_vertices, next_event};
@@ -17,6 +17,7 @@ use super::subpath::{NullSurface, SubPath};
 use super::technique_images::{Record, TechniqueValues};
 use super::{Family, FamilyValues, Iteration, Techniques};
 use crate::fluorescent::{FluorescentVertex, view};
+use crate::path_tracer::LightSampler;
 
 /// Traces the camera sub-path through raster pixel `(x, y)` and returns its contributions by
 /// technique family.
@@ -120,8 +121,15 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     let mut group_throughputs = (!group_sets.is_empty()).then(|| GroupThroughputs::new(group_sets, path.throughput));
     // The light sub-path's BSDFs, built on first use and shared by all camera vertices.
     let mut light_bsdfs = LightBsdfs::new(hero);
+    // Next-event estimation draws first at a surface vertex (s = 1, below): an environment
+    // map's sample can be prefetched while the ray to the vertex is traced (not in media, where
+    // the flight draws before it).
+    let hint = techniques.connect && !media_active && scene.background_light().is_some_and(Light::has_prefetch);
 
     loop {
+        if hint {
+            LightSampler::Power.prefetch_next_event(scene, rng);
+        }
         let arrival = if media_active {
             let p = &mut path;
             advance(scene, &mut p.ray, &mut p.origin_offset, &mut p.flight, &mut p.throughput, rng, w)

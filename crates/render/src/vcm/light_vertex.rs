@@ -444,7 +444,7 @@ impl<'a, S: SpectralMode> LightPath<'a, S> {
         LightPathIter { path: self, next: 0 }
     }
 
-    /// Prefetches every vertex ([`crate::prefetch`]), so that their cache misses overlap with
+    /// Prefetches every vertex ([`math::prefetch()`]), so that their cache misses overlap with
     /// each other and with the caller's next work instead of coming one by one at the first
     /// connections: stored in grid slot order, a path's vertices lie far apart. (Before, one
     /// loop read them all with its result kept opaque to the optimiser, which removed a third
