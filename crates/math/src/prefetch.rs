@@ -12,7 +12,7 @@
 //!   off the VCM iteration on SmallVCM's scenes 0–3 ("Prefetching the merge queries").
 //! - Next-event estimation from an environment map: the sample reads an alias slot and four
 //!   texels of a 3 MB table at random. Hinted before the ray to the vertex is traced, with the
-//!   numbers the sample will draw, they take 7 % off a `pt` render of Mitsuba's matpreview
+//!   numbers the sample will draw, they take 8 % off a `pt` render of Mitsuba's matpreview
 //!   ("Prefetching the environment map's next-event sample").
 //!
 //! Those measurements are what the exception to the workspace's `unsafe_code = "deny"` rests
