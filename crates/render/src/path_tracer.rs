@@ -239,7 +239,7 @@ impl PathTracer {
         // The path loop with the environment map's prefetch hint is its own instantiation, so
         // that the loop of the other scenes keeps its code as it was (a run-time test of the
         // flag in the loop cost ~1 % more instructions on Mitsuba's Cornell box).
-        let hint = self.next_event_estimation && scene.background_light().is_some_and(Light::has_prefetch);
+        let hint = self.next_event_estimation && scene.has_prefetchable_background();
         if self.spectral {
             let (u, v) = (rng.uniform(), rng.uniform());
             let u = wavelength_sample.unwrap_or(u);

@@ -557,6 +557,13 @@ impl Scene {
         self.background.map(|i| &self.lights[i as usize])
     }
 
+    /// Whether the environment light's next-event samples can be prefetched
+    /// ([`Light::has_prefetch`]): the test that decides whether a renderer's path loop issues
+    /// [`Light::prefetch_direct`] hints.
+    pub fn has_prefetchable_background(&self) -> bool {
+        self.background_light().is_some_and(Light::has_prefetch)
+    }
+
     /// The material of a hit.
     pub fn material(&self, hit: &SurfaceHit) -> &Material {
         &self.materials[hit.material as usize]

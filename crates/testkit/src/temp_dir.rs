@@ -59,11 +59,6 @@ impl TempDir {
     pub fn path(&self) -> &Path {
         &self.path
     }
-
-    /// `p` inside the directory.
-    pub fn join(&self, p: impl AsRef<Path>) -> PathBuf {
-        self.path.join(p)
-    }
 }
 
 impl Deref for TempDir {

@@ -71,15 +71,6 @@ impl AliasTable {
     pub fn sample_remapped(&self, u: f32) -> (usize, f32) {
         sample_slots(&self.slots, u)
     }
-
-    /// The slot that [`AliasTable::sample_remapped`] reads for `u`, and its own entry (the
-    /// answer unless the slot passes `u` on to its alias): for a caller that issues a prefetch
-    /// hint ([`crate::prefetch()`]) for the slot and the entry's data before it samples.
-    #[inline]
-    pub fn slot_of(&self, u: f32) -> (&impl Sized, usize) {
-        let k = slot_index(self.slots.len(), u);
-        (&self.slots[k], k)
-    }
 }
 
 /// One alias table per row of a `rows × width` grid of weights, all slots in one array: a
@@ -125,7 +116,9 @@ impl AliasRows {
         sample_slots(&self.slots[row * self.width..(row + 1) * self.width], u)
     }
 
-    /// [`AliasTable::slot_of`] in row `row`.
+    /// The slot that [`AliasRows::sample_remapped`] reads for `u` in row `row`, and its own
+    /// entry (the answer unless the slot passes `u` on to its alias): for a caller that issues a
+    /// prefetch hint ([`crate::prefetch()`]) for the slot and the entry's data before it samples.
     #[inline]
     pub fn slot_of(&self, row: usize, u: f32) -> (&impl Sized, usize) {
         let k = slot_index(self.width, u);
@@ -250,7 +243,9 @@ mod tests {
                 let u = rng.uniform();
                 let (a, b) = (rows.sample_remapped(r, u), table.sample_remapped(u));
                 assert_eq!((a.0, a.1.to_bits()), (b.0, b.1.to_bits()), "row {r}, u {u}");
-                assert_eq!(rows.slot_of(r, u).1, table.slot_of(u).1);
+                // The hinted slot is the one read: the answer is its own entry or its alias.
+                let (k, slot) = (rows.slot_of(r, u).1, rows.slots[r * width + slot_index(width, u)]);
+                assert!(k == slot_index(width, u) && (a.0 == k || a.0 == slot.alias as usize), "row {r}, u {u}");
             }
         }
         // Power check of the comparison: another row's table answers differently.

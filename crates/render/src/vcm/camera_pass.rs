@@ -5,7 +5,7 @@
 
 use math::{RAY_EPSILON, Rng, Vec3};
 use scene::camera::PrimaryDensity;
-use scene::{Bsdf, Light, Scene, TransportMode};
+use scene::{Bsdf, Scene, TransportMode};
 use spectrum::SpectralMode;
 
 use super::connect::{CameraEnd, LightBsdfs, connect_vertices, next_event};
@@ -124,7 +124,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     // Next-event estimation draws first at a surface vertex (s = 1, below): an environment
     // map's sample can be prefetched while the ray to the vertex is traced (not in media, where
     // the flight draws before it).
-    let hint = techniques.connect && !media_active && scene.background_light().is_some_and(Light::has_prefetch);
+    let hint = techniques.connect && !media_active && scene.has_prefetchable_background();
 
     loop {
         if hint {
