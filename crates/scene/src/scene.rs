@@ -560,6 +560,7 @@ impl Scene {
     /// Whether the environment light's next-event samples can be prefetched
     /// ([`Light::has_prefetch`]): the test that decides whether a renderer's path loop issues
     /// [`Light::prefetch_direct`] hints.
+    #[inline]
     pub fn has_prefetchable_background(&self) -> bool {
         self.background_light().is_some_and(Light::has_prefetch)
     }

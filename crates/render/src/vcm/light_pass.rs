@@ -17,6 +17,40 @@ use super::subpath::{NullSurface, SubPath};
 /// Stream selector of the camera connections' generator.
 const CAMERA_CONNECTIONS: u64 = 0x6361_6d65_7261;
 
+/// The numbers a light sub-path's start draws from its generator, in this order.
+struct PathStart {
+    /// Seeds the camera connections' generator (two draws, high word first).
+    camera_seed: u64,
+    /// Picks the light ([`Scene::pick_light`]).
+    pick_u: f32,
+    /// The point on the light.
+    u_position: [f32; 2],
+    /// The direction of emission.
+    u_direction: [f32; 2],
+}
+
+impl PathStart {
+    #[inline]
+    fn draw(rng: &mut Rng) -> Self {
+        let high = u64::from(rng.next_u32());
+        let camera_seed = high << 32 | u64::from(rng.next_u32());
+        PathStart { camera_seed, pick_u: rng.uniform(), u_position: rng.uniform2(), u_direction: rng.uniform2() }
+    }
+}
+
+/// A prefetch hint for the emission sample of the light sub-path that `rng` (its generator,
+/// not yet drawn from) will start: when it picks an environment map, the map's tables and texels
+/// (megabytes, read at random) are fetched while the caller traces the sub-path before it
+/// ([`scene::Light::prefetch_emission`]). Reads a copy of the generator: no value changes.
+/// Worth calling only when [`Scene::has_prefetchable_background`].
+#[inline]
+pub fn prefetch_light_path(scene: &Scene, rng: &Rng) {
+    let start = PathStart::draw(&mut rng.clone());
+    if let Some((_, light, _)) = scene.pick_light(start.pick_u) {
+        light.prefetch_emission(start.u_direction);
+    }
+}
+
 /// Traces one light sub-path: appends its stored vertices to `vertices` and its camera
 /// connections to `splats`. `codes` caches the codes of the stored normals (pass the same one
 /// for the light sub-paths traced one after another).
@@ -37,10 +71,8 @@ pub fn trace_light_path<S: SpectralMode>(
     let hero = S::hero_wavelength(wavelengths);
     let k = &it.constants;
     let techniques = &it.techniques;
-    let mut camera_rng = Rng::new(u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32()), CAMERA_CONNECTIONS);
-    let pick_u = rng.uniform();
-    let u_position = rng.uniform2();
-    let u_direction = rng.uniform2();
+    let PathStart { camera_seed, pick_u, u_position, u_direction } = PathStart::draw(rng);
+    let mut camera_rng = Rng::new(camera_seed, CAMERA_CONNECTIONS);
     let Some((index, light, pick)) = scene.pick_light(pick_u) else { return };
     let emission = light.sample_emission(u_position, u_direction, &scene.bounding_sphere);
     let emission_pdf = emission.emission_pdf.0 * pick;

@@ -59,7 +59,7 @@ use spectrum::{Hero4, Rgb, SpectralMode};
 use crate::hash_grid::HashGrid;
 use camera_pass::trace_camera_path_recorded;
 use connect::Splat;
-use light_pass::trace_light_path;
+use light_pass::{prefetch_light_path, trace_light_path};
 use light_vertex::{LightPath, LightVertex, LightVertexStore, MergeRecord, NormalCodes};
 use merge::{MergeGroup, MergeScope, MergeSource, MergeVertices};
 use mis::MisConstants;
@@ -707,6 +707,8 @@ impl<S: SpectralMode> Engine<S> {
             None => frame.pixels.chunks(width).map(|_| <&mut [Rgb]>::default()).collect(),
         };
         let record_families = family_frames.is_some();
+        // Each pixel's light sub-path hints the emission sample of the next pixel's.
+        let hint = scene.has_prefetchable_background();
         let trace_row = |row: usize, pixels: &mut [Rgb], technique_row: &mut [Rgb]| -> RowResult {
             let mut vertices = Vec::new();
             let mut splats = Vec::new();
@@ -719,6 +721,9 @@ impl<S: SpectralMode> Engine<S> {
                 let index = row * width + column;
                 vertices.clear();
                 let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
+                if hint && index + 1 < pixel_count {
+                    prefetch_light_path(scene, &Rng::for_stream(seed, iteration, LIGHT_STREAM | (index + 1) as u64));
+                }
                 let wavelengths = sets.get(seed, iteration, index as u64);
                 trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &*wavelengths, &mut codes);
                 let mut rng = crate::splat_frame::camera_stream(seed, iteration, index);
@@ -944,14 +949,20 @@ fn trace_light_chunks<S: SpectralMode>(
     chunks: &mut Vec<LightChunk<S>>,
 ) {
     chunks.resize_with(paths.len().div_ceil(LIGHT_CHUNK), Default::default);
+    let hint = scene.has_prefetchable_background();
     chunks.par_iter_mut().enumerate().for_each(|(c, (vertices, ends, splats))| {
         vertices.clear();
         ends.clear();
         splats.clear();
         let mut codes = NormalCodes::default();
         let first = paths.start + c * LIGHT_CHUNK;
-        for path in first..(first + LIGHT_CHUNK).min(paths.end) {
+        let end = (first + LIGHT_CHUNK).min(paths.end);
+        for path in first..end {
             let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
+            // The emission sample of the next sub-path is fetched while this one is traced.
+            if hint && path + 1 < end {
+                prefetch_light_path(scene, &Rng::for_stream(seed, iteration, LIGHT_STREAM | (path + 1) as u64));
+            }
             let wavelengths = sets.get(seed, iteration, path as u64);
             trace_light_path(scene, it, &mut rng, vertices, splats, &*wavelengths, &mut codes);
             ends.push(vertices.len() as u32);

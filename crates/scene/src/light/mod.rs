@@ -268,7 +268,18 @@ impl Light {
         }
     }
 
-    /// Whether [`Light::prefetch_direct`] does anything for this light (an environment map),
+    /// A prefetch hint for [`Light::sample_emission`] with the same `u_direction`, for a caller
+    /// that knows it some work before it samples (the light pass, one light sub-path ahead): for
+    /// an environment map the tables and texels its direction sample reads, as
+    /// [`Light::prefetch_direct`]; a no-op for the other lights. No value changes.
+    #[inline]
+    pub fn prefetch_emission(&self, u_direction: [f32; 2]) {
+        if let Light::EnvMap(light) = self {
+            light.prefetch_sample(u_direction);
+        }
+    }
+
+    /// Whether [`Light::prefetch_direct`] and [`Light::prefetch_emission`] do anything for this light (an environment map),
     /// so that callers can skip preparing its numbers for the other lights.
     pub fn has_prefetch(&self) -> bool {
         matches!(self, Light::EnvMap(_))
