@@ -267,16 +267,19 @@ impl EnvMapLight {
     }
 
     /// Prefetch hints ([`math::prefetch()`]) for what [`EnvMapLight::sample`] will read for the
-    /// same `u`: the alias slot of the sampled row and the four texels of the slot's own cell
-    /// (its alias's are only known from the slot). A hint only: no value changes.
+    /// same `u`: the alias slot of the sampled row and the texels of the slot's own cell (its
+    /// alias's are only known from the slot). Of the cell's four texels only the two of its
+    /// left column are hinted: each shares its cache line with its right neighbour except at a
+    /// line's end (16-byte texels: one pair in four), and hinting all four was slower (paired
+    /// median 0.976 over 16 rounds on matpreview `pt` for the two; docs/performance.md). A hint
+    /// only: no value changes.
     #[inline]
     pub(super) fn prefetch_sample(&self, u: [f32; 2]) {
         let d = &*self.data;
         let (j0, _) = d.rows.sample_remapped(u[1]);
         let (slot, i0) = d.columns.slot_of(j0, u[0]);
         math::prefetch(slot);
-        let i1 = if i0 + 1 == d.width { 0 } else { i0 + 1 };
-        for k in [j0 * d.width + i0, j0 * d.width + i1, (j0 + 1) * d.width + i0, (j0 + 1) * d.width + i1] {
+        for k in [j0 * d.width + i0, (j0 + 1) * d.width + i0] {
             math::prefetch(&d.texels[k]);
         }
     }
