@@ -557,9 +557,9 @@ impl Scene {
         self.background.map(|i| &self.lights[i as usize])
     }
 
-    /// Whether the environment light's next-event samples can be prefetched
-    /// ([`Light::has_prefetch`]): the test that decides whether a renderer's path loop issues
-    /// [`Light::prefetch_direct`] hints.
+    /// Whether the environment light's samples can be prefetched ([`Light::has_prefetch`]): the
+    /// test that decides whether a renderer issues [`Light::prefetch_direct`] hints in its path
+    /// loops and [`Light::prefetch_emission`] hints in its light pass.
     #[inline]
     pub fn has_prefetchable_background(&self) -> bool {
         self.background_light().is_some_and(Light::has_prefetch)

@@ -279,8 +279,9 @@ impl Light {
         }
     }
 
-    /// Whether [`Light::prefetch_direct`] and [`Light::prefetch_emission`] do anything for this light (an environment map),
-    /// so that callers can skip preparing its numbers for the other lights.
+    /// Whether [`Light::prefetch_direct`] and [`Light::prefetch_emission`] do anything for this
+    /// light (an environment map), so that callers can skip preparing its numbers for the other
+    /// lights.
     pub fn has_prefetch(&self) -> bool {
         matches!(self, Light::EnvMap(_))
     }
