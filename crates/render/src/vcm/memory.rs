@@ -11,7 +11,6 @@
 //! [`PILOT_PATHS`] light sub-paths of iteration 0 (the same random streams the render will
 //! use) and scales their mean counts to one sub-path per pixel.
 
-use math::Rng;
 use scene::Scene;
 use spectrum::{Hero4, Rgb};
 
@@ -19,7 +18,7 @@ use super::connect::Splat;
 use super::light_pass::trace_light_path;
 use super::light_vertex::{LightVertex, MergeRecord, NormalCodes};
 use super::mis::MisConstants;
-use super::{Iteration, LIGHT_STREAM, Techniques, VcmSettings};
+use super::{Iteration, Techniques, VcmSettings, light_stream};
 
 /// Light sub-paths traced by the pilot.
 pub const PILOT_PATHS: usize = 4096;
@@ -85,7 +84,7 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
     let (mut stored, mut splatted) = (0usize, 0usize);
     let mut codes = NormalCodes::default();
     for path in 0..pilot {
-        let mut rng = Rng::for_stream(seed, 0, LIGHT_STREAM | path as u64);
+        let mut rng = light_stream(seed, 0, path);
         // The vertex count does not depend on the spectral mode (sampling decisions use RGB
         // values in both), so the pilot traces in RGB.
         trace_light_path::<Rgb>(scene, &it, &mut rng, &mut vertices, &mut splats, &(), &mut codes);

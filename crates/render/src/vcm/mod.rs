@@ -366,6 +366,13 @@ const LIGHT_CHUNK: usize = 1024;
 /// Offset that separates the random streams of light sub-paths from those of camera paths.
 const LIGHT_STREAM: u64 = 1 << 62;
 
+/// The random stream of light sub-path `path` in iteration `iteration` (the counterpart of
+/// [`crate::splat_frame::camera_stream`]): every light pass starts that sub-path with it.
+#[inline]
+pub(super) fn light_stream(seed: u64, iteration: u64, path: usize) -> Rng {
+    Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64)
+}
+
 /// The engine and its buffers (kept across iterations), in RGB or spectral mode.
 pub struct VcmEngine {
     kind: EngineKind,
@@ -717,12 +724,14 @@ impl<S: SpectralMode> Engine<S> {
             let mut rejected = RejectedCounts::default();
             let mut stage = vec![Rgb::BLACK; images];
             let mut codes = NormalCodes::default();
+            // The next pixel's light generator, built once: for the hint, then for its path.
+            let mut next_light_rng = light_stream(seed, iteration, row * width);
             for (column, pixel) in pixels.iter_mut().enumerate() {
                 let index = row * width + column;
                 vertices.clear();
-                let mut light_rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | index as u64);
-                if hint && index + 1 < pixel_count {
-                    prefetch_light_path(scene, &Rng::for_stream(seed, iteration, LIGHT_STREAM | (index + 1) as u64));
+                let mut light_rng = std::mem::replace(&mut next_light_rng, light_stream(seed, iteration, index + 1));
+                if hint {
+                    prefetch_light_path(scene, &next_light_rng);
                 }
                 let wavelengths = sets.get(seed, iteration, index as u64);
                 trace_light_path(scene, it, &mut light_rng, &mut vertices, &mut splats, &*wavelengths, &mut codes);
@@ -957,11 +966,13 @@ fn trace_light_chunks<S: SpectralMode>(
         let mut codes = NormalCodes::default();
         let first = paths.start + c * LIGHT_CHUNK;
         let end = (first + LIGHT_CHUNK).min(paths.end);
+        // The next sub-path's generator, built once: for the hint, then for its path.
+        let mut next_rng = light_stream(seed, iteration, first);
         for path in first..end {
-            let mut rng = Rng::for_stream(seed, iteration, LIGHT_STREAM | path as u64);
+            let mut rng = std::mem::replace(&mut next_rng, light_stream(seed, iteration, path + 1));
             // The emission sample of the next sub-path is fetched while this one is traced.
-            if hint && path + 1 < end {
-                prefetch_light_path(scene, &Rng::for_stream(seed, iteration, LIGHT_STREAM | (path + 1) as u64));
+            if hint {
+                prefetch_light_path(scene, &next_rng);
             }
             let wavelengths = sets.get(seed, iteration, path as u64);
             trace_light_path(scene, it, &mut rng, vertices, splats, &*wavelengths, &mut codes);
