@@ -15,6 +15,7 @@ CASES = [
     ("cornell-area-mirror", "vcm", ["--spectral"], {"spectral": True}),
     ("scenes/cornell-fluorescent.xml", "bpt", ["--max-length", "5"], {"max_length": 5}),
     ("cornell-area-mirror", "pt", ["--light-sampler", "power"], {"light_sampler": "power"}),
+    ("cornell-area-mirror", "pt", ["--sampler", "independent"], {"sampler": "independent"}),
     ("cornell-fog", "vcm", [], {}),
     ("cornell-fog", "bpm", ["--volume-radius-factor", "0.05"], {"volume_radius_factor": 0.05}),
 ]

@@ -78,6 +78,7 @@ def render(
     rr_depth: Union[int, str, None] = None,
     heuristic: str = "balance",
     light_sampler: str = "tree",
+    sampler: str = "sobol",
     max_memory: Optional[int] = None,
     permissive: bool = False,
 ) -> Image:
@@ -107,6 +108,7 @@ class Session:
         rr_depth: Union[int, str, None] = None,
         heuristic: str = "balance",
         light_sampler: str = "tree",
+        sampler: str = "sobol",
         max_memory: Optional[int] = None,
         permissive: bool = False,
         techniques: bool = False,

@@ -17,6 +17,7 @@ use pyo3::types::PyDict;
 use render::Algorithm;
 use render::driver::Budget;
 use render::path_tracer::{Heuristic, LightSampler, RussianRoulette};
+use render::primary_samples::PrimarySamples;
 use session::{Request, SceneSource};
 
 /// The settings of a render, as the Python functions receive them.
@@ -41,6 +42,7 @@ pub struct Options {
     pub rr_depth: Option<String>,
     pub heuristic: String,
     pub light_sampler: String,
+    pub sampler: String,
     pub max_memory: Option<u64>,
     pub permissive: bool,
     /// `vcm.Session` only: record per-technique images.
@@ -69,6 +71,7 @@ impl Default for Options {
             rr_depth: None,
             heuristic: "balance".to_string(),
             light_sampler: "tree".to_string(),
+            sampler: "sobol".to_string(),
             max_memory: None,
             permissive: false,
             techniques: false,
@@ -78,7 +81,7 @@ impl Default for Options {
 }
 
 /// The keywords both functions accept.
-const COMMON: [&str; 16] = [
+const COMMON: [&str; 17] = [
     "algorithm",
     "resolution",
     "seed",
@@ -93,6 +96,7 @@ const COMMON: [&str; 16] = [
     "rr_depth",
     "heuristic",
     "light_sampler",
+    "sampler",
     "max_memory",
     "permissive",
 ];
@@ -180,6 +184,7 @@ impl Options {
                 "rr_depth" => o.rr_depth = extract_rr_depth(caller, v)?,
                 "heuristic" => o.heuristic = extract(caller, &key, v, "a str")?,
                 "light_sampler" => o.light_sampler = extract(caller, &key, v, "a str")?,
+                "sampler" => o.sampler = extract(caller, &key, v, "a str")?,
                 "max_memory" => o.max_memory = extract(caller, &key, v, "an int (bytes) or None")?,
                 "permissive" => o.permissive = extract(caller, &key, v, "a bool")?,
                 "techniques" => o.techniques = extract(caller, &key, v, "a bool")?,
@@ -235,6 +240,8 @@ impl Options {
             .ok_or_else(|| anyhow!("heuristic: expected 'balance' or 'power', got '{}'", self.heuristic))?;
         request.light_sampler = LightSampler::from_name(&self.light_sampler)
             .ok_or_else(|| anyhow!("light_sampler: expected 'tree' or 'power', got '{}'", self.light_sampler))?;
+        request.sampler = PrimarySamples::from_name(&self.sampler)
+            .ok_or_else(|| anyhow!("sampler: expected 'sobol' or 'independent', got '{}'", self.sampler))?;
         request.max_memory = self.max_memory;
         request.permissive = self.permissive;
         // `Session.variance()` may be asked for at any time.

@@ -15,6 +15,7 @@ use spectrum::Rgb;
 
 use crate::eye_light;
 use crate::path_tracer::PathTracer;
+use crate::primary_samples::{PathDims, PrimarySamples};
 use crate::progressive::{Progressive, run_budget};
 use crate::splat_frame;
 use crate::vcm::technique_images::{TechniqueImages, TechniqueLayout};
@@ -100,6 +101,10 @@ pub struct RenderSettings {
     pub heuristic: crate::path_tracer::Heuristic,
     /// How the path tracer (`pt`) picks lights for next-event estimation.
     pub light_sampler: crate::path_tracer::LightSampler,
+    /// Where the path tracer (`pt`) takes its first vertices' numbers from
+    /// ([`crate::primary_samples`]). Default: independent numbers (the front ends' default,
+    /// `session::Request`, is the stratified sequence).
+    pub primary_samples: PrimarySamples,
     /// Spectral mode with merging: wavelength groups per iteration
     /// ([`crate::vcm::VcmSettings::wavelength_groups`]).
     pub wavelength_groups: u32,
@@ -130,6 +135,7 @@ impl Default for RenderSettings {
             russian_roulette: crate::path_tracer::RussianRoulette::default(),
             heuristic: crate::path_tracer::Heuristic::Balance,
             light_sampler: crate::path_tracer::LightSampler::default(),
+            primary_samples: PrimarySamples::default(),
             wavelength_groups: crate::vcm::wavelengths::DEFAULT_WAVELENGTH_GROUPS,
             variance: true,
             summation: Summation::Float,
@@ -244,6 +250,7 @@ impl<'a> Renderer<'a> {
                 russian_roulette: settings.russian_roulette,
                 heuristic: settings.heuristic,
                 light_sampler: settings.light_sampler,
+                primary_samples: settings.primary_samples,
                 ..PathTracer::new(settings.max_length)
             }),
         };
@@ -265,14 +272,17 @@ impl<'a> Renderer<'a> {
             Integrator::Vcm(engine) => engine.run_iteration(scene, seed, iteration, frame),
             Integrator::PathTracing(tracer) => {
                 let spectral = tracer.spectral;
-                render_iteration(scene, seed, iteration, frame, |ray, rng, index| {
+                render_iteration(scene, seed, iteration, tracer.primary_samples, frame, |ray, rng, index, dims| {
                     // Spectral mode: the pixel's wavelengths stratified over the iterations.
                     let u = spectral.then(|| crate::wavelength_sequence::per_index_sample(seed, iteration, index));
-                    tracer.radiance_at(scene, ray, rng, u)
+                    tracer.radiance_with(scene, ray, rng, u, dims)
                 })
             }
             Integrator::EyeLight => {
-                render_iteration(scene, seed, iteration, frame, |ray, _, _| eye_light::eye_light(scene, &ray))
+                let independent = PrimarySamples::Independent;
+                render_iteration(scene, seed, iteration, independent, frame, |ray, _, _, _| {
+                    eye_light::eye_light(scene, &ray)
+                })
             }
         });
         self.iteration += 1;
@@ -394,11 +404,15 @@ fn render_iteration(
     scene: &Scene,
     seed: u64,
     iteration: u64,
+    samples: PrimarySamples,
     frame: &mut FrameBuffer,
-    radiance: impl Fn(math::Ray, &mut Rng, u64) -> Rgb + Sync,
+    radiance: impl Fn(math::Ray, &mut Rng, u64, PathDims) -> Rgb + Sync,
 ) -> u64 {
     let width = frame.width as usize;
-    let film_offset = splat_frame::film_offset(seed, iteration);
+    let film_offset = match samples {
+        PrimarySamples::Independent => splat_frame::film_offset(seed, iteration),
+        PrimarySamples::Sobol => crate::primary_samples::film_offset(seed, iteration),
+    };
     let rejected = frame
         .pixels
         .par_chunks_mut(width)
@@ -406,11 +420,14 @@ fn render_iteration(
         .map(|(y, row)| {
             let mut rejected = 0u64;
             for (x, pixel) in row.iter_mut().enumerate() {
+                let index = (y * width + x) as u64;
                 let mut rng = splat_frame::camera_stream(seed, iteration, y * width + x);
+                let dims = PathDims::new(samples, seed, index, iteration);
                 // Raster position through the filter (weight 1 for the box and when
                 // splatting), then the lens.
-                let primary = scene.camera.sample_primary(x as u32, y as u32, film_offset, &mut rng);
-                let value = radiance(primary.ray, &mut rng, (y * width + x) as u64) * primary.weight;
+                let primary =
+                    scene.camera.sample_primary_with(x as u32, y as u32, film_offset, dims.raster(), &mut rng);
+                let value = radiance(primary.ray, &mut rng, index, dims) * primary.weight;
                 *pixel = if value.is_finite() {
                     value
                 } else {

@@ -20,6 +20,7 @@ pub mod fluorescent;
 pub mod hash_grid;
 mod null_walk;
 pub mod path_tracer;
+pub mod primary_samples;
 pub(crate) use math::prefetch;
 pub mod progressive;
 pub mod splat_frame;

@@ -23,6 +23,7 @@ use scene::{Bsdf, Light, Scene, TransportMode};
 use spectrum::{Hero4, Rgb, SpectralMode};
 
 use crate::fluorescent::{FluorescentVertex, scatter_slots, view};
+use crate::primary_samples::PathDims;
 use crate::{balance_heuristic, power_heuristic};
 
 /// Settings of the path tracer.
@@ -48,6 +49,9 @@ pub struct PathTracer {
     /// the weights not sum to one (a bias); tests use that to show they detect a wrong pmf.
     #[doc(hidden)]
     pub mis_pick_scale: f32,
+    /// Where the first vertices' numbers come from (surface scenes; the volumetric walk draws
+    /// independent numbers).
+    pub primary_samples: crate::primary_samples::PrimarySamples,
 }
 
 /// How the path tracer's next-event estimation picks a light. The VCM engine always uses the
@@ -111,8 +115,16 @@ impl LightSampler {
     /// the image stay the same.
     pub(crate) fn prefetch_next_event(self, scene: &Scene, rng: &Rng) {
         let mut ahead = rng.clone();
-        if let Some(light) = self.pick_distant(scene, ahead.uniform()) {
-            light.prefetch_direct(ahead.uniform2());
+        let pick = ahead.uniform();
+        self.prefetch_next_event_for(scene, pick, ahead.uniform2());
+    }
+
+    /// [`LightSampler::prefetch_next_event`] for known numbers: the pick `pick` and the light's
+    /// two numbers `u`.
+    #[inline]
+    pub(crate) fn prefetch_next_event_for(self, scene: &Scene, pick: f32, u: [f32; 2]) {
+        if let Some(light) = self.pick_distant(scene, pick) {
+            light.prefetch_direct(u);
         }
     }
 
@@ -222,6 +234,7 @@ impl PathTracer {
             heuristic: Heuristic::Balance,
             light_sampler: LightSampler::default(),
             mis_pick_scale: 1.0,
+            primary_samples: crate::primary_samples::PrimarySamples::Independent,
         }
     }
 
@@ -235,6 +248,18 @@ impl PathTracer {
     /// iterations of the pixel, [`crate::wavelength_sequence`]); `rng` draws the same numbers
     /// either way.
     pub fn radiance_at(&self, scene: &Scene, camera_ray: Ray, rng: &mut Rng, wavelength_sample: Option<f32>) -> Rgb {
+        self.radiance_with(scene, camera_ray, rng, wavelength_sample, PathDims::INDEPENDENT)
+    }
+
+    /// [`PathTracer::radiance_at`] with the first vertices' numbers from `dims`.
+    pub(crate) fn radiance_with(
+        &self,
+        scene: &Scene,
+        camera_ray: Ray,
+        rng: &mut Rng,
+        wavelength_sample: Option<f32>,
+        dims: PathDims,
+    ) -> Rgb {
         let volumetric = scene.media.is_active();
         // The path loop with the environment map's prefetch hint is its own instantiation, so
         // that the loop of the other scenes keeps its code as it was (a run-time test of the
@@ -247,17 +272,17 @@ impl PathTracer {
             let value = if volumetric {
                 crate::volumetric::radiance::<Hero4>(self, scene, camera_ray, rng, &wavelengths)
             } else if hint {
-                radiance::<Hero4, true>(self, scene, camera_ray, rng, &wavelengths)
+                radiance::<Hero4, true>(self, scene, camera_ray, rng, &wavelengths, dims)
             } else {
-                radiance::<Hero4, false>(self, scene, camera_ray, rng, &wavelengths)
+                radiance::<Hero4, false>(self, scene, camera_ray, rng, &wavelengths, dims)
             };
             value.to_rgb(&wavelengths)
         } else if volumetric {
             crate::volumetric::radiance::<Rgb>(self, scene, camera_ray, rng, &())
         } else if hint {
-            radiance::<Rgb, true>(self, scene, camera_ray, rng, &())
+            radiance::<Rgb, true>(self, scene, camera_ray, rng, &(), dims)
         } else {
-            radiance::<Rgb, false>(self, scene, camera_ray, rng, &())
+            radiance::<Rgb, false>(self, scene, camera_ray, rng, &(), dims)
         }
     }
 }
@@ -270,6 +295,7 @@ fn radiance<S: SpectralMode, const HINT: bool>(
     camera_ray: Ray,
     rng: &mut Rng,
     w: &S::Wavelengths,
+    dims: PathDims,
 ) -> S {
     let (max_length, nee, heuristic) = (tracer.max_length, tracer.next_event_estimation, tracer.heuristic);
     let sampler = tracer.light_sampler;
@@ -294,8 +320,14 @@ fn radiance<S: SpectralMode, const HINT: bool>(
     let pick_probability = |index, p, n| sampler.probability(scene, p, n, index) * tracer.mis_pick_scale;
 
     loop {
+        // The vertex this ray finds (0: the first surface hit).
+        // Its numbers, when they come from the sequence.
+        let stratified = dims.vertex(path_length - 1);
         if HINT {
-            sampler.prefetch_next_event(scene, rng);
+            match &stratified {
+                Some(d) => sampler.prefetch_next_event_for(scene, d.pick_and_lobe[0], d.light),
+                None => sampler.prefetch_next_event(scene, rng),
+            }
         }
         let Some(hit) = scene.intersect(&ray) else {
             // The ray leaves the scene: environment light.
@@ -346,9 +378,14 @@ fn radiance<S: SpectralMode, const HINT: bool>(
         // Next-event estimation (a path one segment longer).
         if nee
             && !bsdf.is_delta()
-            && let Some((index, light, pick)) = sampler.pick(scene, hit.position, hit.shading_normal, rng.uniform())
+            && let Some((index, light, pick)) = sampler.pick(
+                scene,
+                hit.position,
+                hit.shading_normal,
+                stratified.map_or_else(|| rng.uniform(), |d| d.pick_and_lobe[0]),
+            )
         {
-            let u = rng.uniform2();
+            let u = stratified.map_or_else(|| rng.uniform2(), |d| d.light);
             if let Some(direct) = light.sample_direct(hit.position, u, sphere)
                 && let Some(eval) = bsdf.evaluate(direct.direction)
                 && !scene.occluded(hit.position, direct.direction, direct.distance)
@@ -372,8 +409,9 @@ fn radiance<S: SpectralMode, const HINT: bool>(
         // BSDF is sampled (a stopped path does not pay for the sample), with the numbers drawn
         // in the order of sampling first: the path's stream ends with the path, so the images
         // are the same as when the sample came first.
-        let u_sample = rng.uniform3();
-        if continuation < 1.0 && rng.uniform() >= continuation {
+        let u_sample =
+            stratified.map_or_else(|| rng.uniform3(), |d| [d.direction[0], d.direction[1], d.pick_and_lobe[1]]);
+        if continuation < 1.0 && stratified.map_or_else(|| rng.uniform(), |d| d.roulette[0]) >= continuation {
             break;
         }
         let Some(sample) = bsdf.sample(u_sample) else { break };
@@ -390,7 +428,10 @@ fn radiance<S: SpectralMode, const HINT: bool>(
             && path_length >= start
         {
             let survival = throughput.max_component().min(0.95);
-            if survival.is_nan() || survival <= 0.0 || rng.uniform() >= survival {
+            if survival.is_nan()
+                || survival <= 0.0
+                || stratified.map_or_else(|| rng.uniform(), |d| d.roulette[1]) >= survival
+            {
                 break;
             }
             throughput *= 1.0 / survival;

@@ -18,6 +18,7 @@
 //! `slice_iterations`; version 3 files are read as f64 films from iteration 0.
 
 use render::path_tracer::{Heuristic, LightSampler, RussianRoulette};
+use render::primary_samples::PrimarySamples;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -65,6 +66,9 @@ pub struct Recorded {
     /// Light sampler of the path tracer (absent in checkpoints written before it existed:
     /// `power`, the only one then).
     pub light_sampler: LightSampler,
+    /// Where the path tracer's first vertices' numbers come from (absent in checkpoints written
+    /// before it existed: `independent`, the only one then).
+    pub sampler: PrimarySamples,
     /// Film mode, `fis` or `splat` (absent in checkpoints written before it existed: `fis`).
     pub film: String,
     /// What the scene was built from.
@@ -155,6 +159,7 @@ pub fn header_lines(r: &Recorded) -> Vec<String> {
     lines.push(format!("russian_roulette={}", r.russian_roulette.name()));
     lines.push(format!("heuristic={}", r.heuristic.name()));
     lines.push(format!("light_sampler={}", r.light_sampler.name()));
+    lines.push(format!("sampler={}", r.sampler.name()));
     lines.push(format!("film={}", r.film));
     lines.push(format!("sums={}", r.sums.name()));
     if let Some(slice) = &r.slice {
@@ -246,6 +251,10 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
             None => Heuristic::default(),
             Some(name) => Heuristic::from_name(name).ok_or_else(|| missing("heuristic"))?,
         },
+        sampler: match fields.get("sampler") {
+            None => PrimarySamples::Independent,
+            Some(name) => PrimarySamples::from_name(name).ok_or_else(|| missing("sampler"))?,
+        },
         light_sampler: match fields.get("light_sampler") {
             None => LightSampler::Power,
             Some(name) => LightSampler::from_name(name).ok_or_else(|| missing("light_sampler"))?,
@@ -329,6 +338,7 @@ mod tests {
             russian_roulette: RussianRoulette::Albedo,
             heuristic: Heuristic::Power,
             light_sampler: LightSampler::Power,
+            sampler: PrimarySamples::Independent,
             film: "splat".into(),
             fingerprint: Fingerprint::builtin(450, (3, 2)),
             sums: Summation::Float,
@@ -407,6 +417,7 @@ mod tests {
             russian_roulette: RussianRoulette::Albedo,
             heuristic: Heuristic::Balance,
             light_sampler: LightSampler::Tree,
+            sampler: PrimarySamples::Sobol,
             film: "fis".into(),
             fingerprint: Fingerprint::builtin(1, (2, 1)),
             sums: Summation::Fixed,

@@ -87,6 +87,7 @@ impl Prepared {
                 request.russian_roulette = Some(recorded.russian_roulette);
                 request.heuristic = recorded.heuristic;
                 request.light_sampler = recorded.light_sampler;
+                request.sampler = recorded.sampler;
                 let mode = FilmMode::from_name(&recorded.film)
                     .ok_or_else(|| anyhow::anyhow!("unknown film mode '{}' in '{}'", recorded.film, path.display()))?;
                 if let Some(asked) = request.film.filter(|asked| *asked != mode) {
@@ -215,6 +216,7 @@ impl Prepared {
             russian_roulette,
             heuristic: r.heuristic,
             light_sampler: r.light_sampler,
+            primary_samples: r.sampler,
             // Checkpoints always carry the sums of squares, so that any resume can ask for a
             // variance image.
             variance: r.keep_variance || r.variance.is_some() || r.checkpoint.is_some(),
@@ -268,6 +270,7 @@ impl Prepared {
             russian_roulette,
             heuristic: r.heuristic,
             light_sampler: r.light_sampler,
+            sampler: r.sampler,
             film: scene.camera.film.name().to_string(),
             fingerprint,
             sums: settings.summation,

@@ -1,6 +1,7 @@
 //! What a front end asks a session for.
 
 use render::path_tracer::{Heuristic, LightSampler, RussianRoulette};
+use render::primary_samples::PrimarySamples;
 use scene::Summation;
 use scene::filter::FilmMode;
 use std::path::PathBuf;
@@ -86,6 +87,8 @@ pub struct Request {
     pub heuristic: Heuristic,
     /// Light sampler of the path tracer's next-event estimation (`pt`).
     pub light_sampler: LightSampler,
+    /// Where the path tracer (`pt`) takes its first vertices' numbers from (`--sampler`).
+    pub sampler: PrimarySamples,
     /// How camera samples reach the pixels (`--film`). `None`: the scene's choice, splatting
     /// for scene files (which name a reconstruction filter), filter importance sampling for the
     /// built-in scenes. A resumed render keeps its checkpoint's mode (asking for another one is
@@ -134,6 +137,8 @@ impl Request {
             russian_roulette: Some(RussianRoulette::Albedo),
             heuristic: defaults.heuristic,
             light_sampler: defaults.light_sampler,
+            // Not the engine's default (independent, for its statistical tests): less noise.
+            sampler: PrimarySamples::Sobol,
             film: None,
             summation: None,
             slice: None,

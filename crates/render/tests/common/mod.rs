@@ -81,7 +81,15 @@ pub fn detectable_bias(a_mean: &[f64], a_se: &[f64], b_mean: &[f64], b_se: &[f64
 }
 
 /// Renders `iterations` iterations of `algorithm` and returns block statistics.
+///
+/// The standard errors come from the spread of the iterations, which is the error of their mean
+/// only when they are independent: the path tracer therefore draws independent numbers here
+/// (`PrimarySamples::Independent`). Its default sequence, whose iterations are negatively
+/// correlated, would make the errors too large and the tests blunt; it is tested against the
+/// independent numbers with errors over independent renders (`tests/primary_samples.rs`).
 pub fn block_estimate(scene: &Scene, settings: &RenderSettings, iterations: u64, block: u32) -> BlockEstimate {
+    let settings =
+        &RenderSettings { primary_samples: render::primary_samples::PrimarySamples::Independent, ..settings.clone() };
     let mut renderer = Renderer::new(scene, settings).unwrap();
     let (w, h) = (scene.camera.width, scene.camera.height);
     let (bx, by) = ((w / block) as usize, (h / block) as usize);
