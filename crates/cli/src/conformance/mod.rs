@@ -286,6 +286,9 @@ fn render_and_judge(
     request.film = args.film;
     request.light_sampler = args.light_sampler;
     request.russian_roulette = args.rr_depth.0;
+    // The verdict takes the render's error from the spread of its iterations, which needs them
+    // independent (the stratified sequence's are not, render::primary_samples).
+    request.sampler = render::primary_samples::PrimarySamples::Independent;
     let rendered = catch(|| session::render(&request, None, &mut Quiet));
     let film = match rendered {
         Ok(outcome) => outcome.output.film,
