@@ -188,12 +188,12 @@ struct RenderArgs {
     /// docs/lights-suite.md.
     #[arg(long, default_value = "tree", value_name = "tree|power", value_parser = parse_light_sampler)]
     light_sampler: LightSampler,
-    /// Where the path tracer (pt) takes the numbers of its first two vertices and of the raster
-    /// position from: `sobol`, a randomised (0,2)-sequence per pixel over the iterations (less
-    /// noise per sample: 0.81x Mitsuba's variance on matpreview at 16 spp against 1.21x, see
-    /// docs/performance.md, "Stratified first vertices"), or `independent` numbers. With `sobol`
-    /// the iterations of a pixel are not independent, so a --variance image over-estimates the
-    /// variance of the mean. Other algorithms draw independent numbers.
+    /// Where the path tracer (pt) takes the numbers of its first surface hit from: `sobol`, one
+    /// Sobol sequence per pixel over the iterations, Owen-scrambled (less noise per sample:
+    /// 0.80x Mitsuba's variance on matpreview at 16 spp against 1.21x, see docs/performance.md,
+    /// "Stratified first vertices"), or `independent` numbers. With `sobol` the iterations of a
+    /// pixel are not independent, so a --variance image over-estimates the variance of the mean.
+    /// Other algorithms draw independent numbers.
     #[arg(long, default_value = "sobol", value_name = "sobol|independent", value_parser = parse_sampler)]
     sampler: PrimarySamples,
     /// How camera samples reach the pixels: `splat` spreads each over the pixels its

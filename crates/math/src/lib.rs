@@ -12,7 +12,7 @@ pub mod pdf;
 pub mod prefetch;
 pub mod ray;
 pub mod rng;
-pub mod sobol02;
+pub mod sobol;
 pub mod special;
 pub mod warp;
 

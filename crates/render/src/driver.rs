@@ -409,10 +409,9 @@ fn render_iteration(
     radiance: impl Fn(math::Ray, &mut Rng, u64, PathDims) -> Rgb + Sync,
 ) -> u64 {
     let width = frame.width as usize;
-    let film_offset = match samples {
-        PrimarySamples::Independent => splat_frame::film_offset(seed, iteration),
-        PrimarySamples::Sobol => crate::primary_samples::film_offset(seed, iteration),
-    };
+    // Independent of the sequence: an offset sequence over the same index would be coupled to
+    // the pixels' dimensions (math::sobol).
+    let film_offset = splat_frame::film_offset(seed, iteration);
     let rejected = frame
         .pixels
         .par_chunks_mut(width)
@@ -425,8 +424,7 @@ fn render_iteration(
                 let dims = PathDims::new(samples, seed, index, iteration);
                 // Raster position through the filter (weight 1 for the box and when
                 // splatting), then the lens.
-                let primary =
-                    scene.camera.sample_primary_with(x as u32, y as u32, film_offset, dims.raster(), &mut rng);
+                let primary = scene.camera.sample_primary(x as u32, y as u32, film_offset, &mut rng);
                 let value = radiance(primary.ray, &mut rng, index, dims) * primary.weight;
                 *pixel = if value.is_finite() {
                     value

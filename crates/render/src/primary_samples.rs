@@ -1,34 +1,27 @@
-//! Where the path tracer's first vertices take their random numbers from: the camera path's
-//! generator (independent samples), or a randomised (0,2)-sequence per pixel and dimension pair,
-//! indexed by the iteration ([`math::sobol02`]), so that over the iterations a pixel's raster
-//! position (its film offset when splatting, shared by all pixels of an iteration), light
-//! samples, BSDF samples and roulette decisions at its first [`STRATIFIED_VERTICES`] vertices
-//! are stratified. Deeper vertices, and the volumetric walk of scenes with media, draw from the
-//! generator.
+//! Where the path tracer's first vertex takes its random numbers from: the camera path's
+//! generator (independent samples), or the first [`math::sobol::DIMENSIONS`] dimensions of one
+//! Sobol sequence, Owen-scrambled per pixel and indexed by the iteration ([`math::sobol`]), so
+//! that over the iterations a pixel's light sample, BSDF sample, light pick, lobe choice and
+//! roulette decisions at its first surface hit are stratified, jointly. Deeper vertices, the
+//! raster position (or the splatting film's offset), the volumetric walk of scenes with media
+//! and the other algorithms draw from the generator.
 //!
-//! Each pair's point in one iteration is uniform over the keys (the render's seed), so every
-//! iteration's estimate keeps the independent estimator's distribution and stays unbiased; what
-//! changes is that iterations of one pixel are no longer independent of each other: they are
-//! negatively correlated, and a variance image computed from their spread over-estimates the
-//! variance of the mean (as for the spectral wavelength sequence, [`crate::wavelength_sequence`]).
-//! The tests that take their errors from that spread use independent numbers; the sequence is
-//! tested against them with errors over independent renders (`tests/primary_samples.rs`).
-//!
-//! Each vertex's four pairs come from the same sequence under different keys. Its index shuffle
-//! keeps every power-of-two prefix stratified, and so (like any such nested shuffle, measured
-//! with a true nested scramble too) it does not decorrelate two pairs as fully as independent
-//! random permutations of the samples would: for a product of one coordinate of each of two
-//! pairs, the variance of a 64-sample mean is about 1.6× that of independent samples (0.64×
-//! for the product of two indicators of a half, 0.18× for a disc in one pair; 1.0×, 0.32× and
-//! 0.17× with random permutations). What the path tracer gains from the pairs' own
-//! stratification outweighs this on every scene measured (docs/performance.md, "Stratified
-//! first vertices").
+//! Each number in one iteration is uniform over the keys (the render's seed), so every
+//! iteration's estimate keeps the independent estimator's distribution and stays unbiased; and
+//! all of a pixel's dimensions come from one sequence with one index, so each pixel's estimate
+//! converges to the integral (an earlier version drew every pair from its own shuffle of a
+//! two-dimensional sequence, which coupled the pairs so that pixels converged to values near,
+//! not at, the integral; docs/performance.md, "Stratified first vertices"). Iterations of one
+//! pixel are not independent of each other: a variance image computed from their spread
+//! over-estimates the variance of the mean. The tests that take their errors from that spread use
+//! independent numbers; the sequence is tested against them with errors over independent renders
+//! (`tests/primary_samples.rs`).
 
-use math::sobol02::{self, SequenceIndex};
+use math::sobol;
 
 /// Vertices of a camera path (0: the first surface hit) whose numbers come from the sequence;
 /// deeper vertices draw from the path's generator.
-pub const STRATIFIED_VERTICES: u32 = 2;
+pub const STRATIFIED_VERTICES: u32 = 1;
 
 /// How the path tracer draws the numbers of its first vertices (`--sampler`).
 ///
@@ -81,7 +74,7 @@ pub(crate) struct VertexDims {
 /// The numbers of one camera path: its pixel's key and the iteration, or nothing (independent).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PathDims {
-    sequence: Option<(u64, SequenceIndex)>,
+    sequence: Option<(u64, u32)>,
 }
 
 impl PathDims {
@@ -94,17 +87,8 @@ impl PathDims {
         match samples {
             PrimarySamples::Independent => Self::INDEPENDENT,
             // Iterations beyond 2³² wrap: the sequence restarts, each point still uniform.
-            PrimarySamples::Sobol => {
-                PathDims { sequence: Some((sobol02::key(seed, pixel, 0), SequenceIndex::new(iteration as u32))) }
-            }
+            PrimarySamples::Sobol => PathDims { sequence: Some((sobol::key(seed, pixel), iteration as u32)) },
         }
-    }
-
-    /// The raster position's two numbers (film modes that place each pixel's sample on its
-    /// own, [`scene::Camera::sample_primary_with`]), when they come from the sequence.
-    #[inline]
-    pub(crate) fn raster(&self) -> Option<[f32; 2]> {
-        self.sequence.map(|(key, index)| index.point(key))
     }
 
     /// The numbers of vertex `vertex` (0: the first surface hit), when it takes them from the
@@ -113,16 +97,16 @@ impl PathDims {
     pub(crate) fn vertex(&self, vertex: u32) -> Option<VertexDims> {
         match self.sequence {
             Some((key, index)) if vertex < STRATIFIED_VERTICES => {
-                let pair = |slot: u32| index.point(key ^ u64::from(4 * vertex + slot + 1));
-                Some(VertexDims { light: pair(0), direction: pair(1), pick_and_lobe: pair(2), roulette: pair(3) })
+                // One Sobol sequence: each number its own dimension (module doc of math::sobol).
+                let d = |j: usize| sobol::sample(index, j, key);
+                Some(VertexDims {
+                    light: [d(0), d(1)],
+                    direction: [d(2), d(3)],
+                    pick_and_lobe: [d(4), d(5)],
+                    roulette: [d(6), d(7)],
+                })
             }
             _ => None,
         }
     }
-}
-
-/// The film offset of iteration `iteration` ([`crate::splat_frame::film_offset`]'s role) from
-/// the sequence: one pair for the whole image, keyed by the seed alone.
-pub(crate) fn film_offset(seed: u64, iteration: u64) -> [f32; 2] {
-    sobol02::point(iteration as u32, sobol02::key(seed, u64::MAX, 0))
 }

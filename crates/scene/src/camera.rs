@@ -304,21 +304,7 @@ impl Camera {
     /// unbiased) while the weight sum a pixel receives from its neighbours is almost constant
     /// (see `render::splat_frame`). Otherwise it takes two numbers from `rng`.
     pub fn sample_primary(&self, x: u32, y: u32, film_offset: [f32; 2], rng: &mut Rng) -> PrimarySample {
-        self.sample_primary_with(x, y, film_offset, None, rng)
-    }
-
-    /// [`Camera::sample_primary`], with the raster position's two numbers `raster_u` given
-    /// instead of drawn from `rng` when camera samples are not splatted (a stratified sequence's,
-    /// for instance); `None` draws them.
-    pub fn sample_primary_with(
-        &self,
-        x: u32,
-        y: u32,
-        film_offset: [f32; 2],
-        raster_u: Option<[f32; 2]>,
-        rng: &mut Rng,
-    ) -> PrimarySample {
-        let u = if self.splats_camera_samples() { film_offset } else { raster_u.unwrap_or_else(|| rng.uniform2()) };
+        let u = if self.splats_camera_samples() { film_offset } else { rng.uniform2() };
         let (raster, weight) = self.sample_pixel(x, y, u);
         let ray = if self.needs_lens_sample() {
             self.generate_ray_through_lens(raster, rng.uniform2())
