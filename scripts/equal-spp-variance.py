@@ -23,6 +23,7 @@ root after `cargo build --release`:
 
 import argparse
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -72,6 +73,9 @@ def main():
     parser.add_argument("--emitter-threshold", type=float, default=5.0,
                         help="a pixel whose mean (sum of channels) exceeds this sees an emitter [5]")
     parser.add_argument("--extra", default="", help="extra arguments for `vcm render` (one string)")
+    parser.add_argument("--mitsuba-sampler", default=None,
+                        help="render Mitsuba with this sampler type instead of the file's "
+                             "(independent, stratified, multijitter, orthogonal, ldsampler)")
     args = parser.parse_args()
     try:
         import mitsuba as mi
@@ -82,9 +86,22 @@ def main():
         sys.exit(f"{args.vcm} not found: run `cargo build --release` first")
     mi.set_variant(args.variant)
     width, height = (int(v) for v in (args.resolution.split("x") * 2)[:2])
+    scene_file = args.scene
+    if args.mitsuba_sampler:
+        # A copy of the file with its sampler's type replaced; its own folder stays on the
+        # resolver's path for meshes and textures.
+        text = open(args.scene).read()
+        pattern = r'<sampler\s+type="[^"]*"'
+        swapped = re.sub(pattern, f'<sampler type="{args.mitsuba_sampler}"', text, count=1)
+        if not re.search(pattern, text):
+            sys.exit(f"{args.scene}: no <sampler type=...> to replace")
+        mi.file_resolver().prepend(os.path.dirname(os.path.abspath(args.scene)))
+        scene_file = os.path.join(tempfile.mkdtemp(), os.path.basename(args.scene))
+        with open(scene_file, "w") as f:
+            f.write(swapped)
     theirs = []
     for seed in range(1, args.seeds + 1):
-        scene = mi.load_file(args.scene, spp=args.spp)
+        scene = mi.load_file(scene_file, spp=args.spp)
         film = mi.traverse(scene.sensors()[0].film())
         film["size"] = [width, height]
         film.update()
@@ -100,7 +117,8 @@ def main():
             ours.append(read_pfm(out, np))
     ours = np.array(ours)
     emitters = dilate(theirs.mean(axis=0).sum(axis=2) > args.emitter_threshold, 4, np)
-    print(f"{args.scene}: {width}x{height}, {args.spp} spp, {args.seeds} seeds; relative variance Σvar/Σmean²")
+    sampler = f", Mitsuba's sampler {args.mitsuba_sampler}" if args.mitsuba_sampler else ""
+    print(f"{args.scene}: {width}x{height}, {args.spp} spp, {args.seeds} seeds{sampler}; relative variance Σvar/Σmean²")
     print("| pixels | count | Mitsuba 3 `path` | ours `pt` | ours / Mitsuba |")
     print("|---|---:|---:|---:|---:|")
     for name, mask in [("all", np.ones_like(emitters)), ("seeing an emitter", emitters), ("the rest", ~emitters)]:

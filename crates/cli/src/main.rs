@@ -229,7 +229,8 @@ struct RenderArgs {
     checkpoint_every: f64,
     /// Also write the per-pixel variance of the mean (the squared standard error, estimated
     /// from the spread of the iterations) to FILE (.exr, .pfm or .hdr), for
-    /// `vcm compare --variance-a/--variance-b`.
+    /// `vcm compare --variance-a/--variance-b`. Exact for independent iterations: with pt's
+    /// default `--sampler sobol` it over-estimates the variance (give `--sampler independent`).
     #[arg(long, value_name = "FILE")]
     variance: Option<PathBuf>,
     /// Write one linear image per technique family (emitter-hit, next-event, light-tracing,

@@ -4,10 +4,10 @@
 //! polynomial and initial direction numbers `m₁ … m_s` of Joe and Kuo's table (2008, "new"
 //! numbers, dimensions 2–8 in their counting), extended by Bratley and Fox's recurrence.
 //! All dimensions share one index, unshuffled: the points are one digital (t, s)-sequence, so a
-//! pixel's dimensions fill their joint space together as the index grows. (Shuffling the index
-//! per dimension pair, as the first version of `--sampler sobol` did, couples the pairs: each
-//! pair's point is then a fixed function of another's, and a pixel's estimate converges to a
-//! value near, not at, the integral; docs/performance.md, "Stratified first vertices".)
+//! pixel's dimensions fill their joint space together as the index grows. (The first version of
+//! `--sampler sobol` drew each dimension pair from its own hash-shuffle of a two-dimensional
+//! sequence; its renders of Mitsuba's Cornell box at 512² stopped converging, for a reason not
+//! identified: docs/performance.md, "Stratified first vertices".)
 //!
 //! Each coordinate is Owen-scrambled by a hash keyed per dimension (bit `j` of the fraction
 //! flipped by a hash of the bits before it): every point is then uniform over the keys (an
@@ -66,17 +66,37 @@ static MATRICES: [[u32; 32]; DIMENSIONS] = {
     v
 };
 
-/// Dimension `dimension` of point `index`, unscrambled, as a 32-bit fraction.
-#[inline]
-fn raw(index: u32, dimension: usize) -> u32 {
-    let columns = &MATRICES[dimension];
-    let (mut i, mut k, mut x) = (index, 0usize, 0u32);
-    while i != 0 {
-        if i & 1 != 0 {
-            x ^= columns[k];
+/// `REVERSED[j][k]`: `MATRICES[j][k]` with its bits reversed (bit `i` the fraction's `2^-(i+1)`
+/// digit), so that the scramble, which works from the low bits up, needs one reversal per sample.
+static REVERSED: [[u32; 32]; DIMENSIONS] = {
+    let mut r = [[0u32; 32]; DIMENSIONS];
+    let mut j = 0;
+    while j < DIMENSIONS {
+        let mut k = 0;
+        while k < 32 {
+            r[j][k] = MATRICES[j][k].reverse_bits();
+            k += 1;
         }
-        i >>= 1;
-        k += 1;
+        j += 1;
+    }
+    r
+};
+
+/// Dimension `dimension` of point `index`, unscrambled, as a 32-bit fraction.
+#[cfg(test)]
+fn raw(index: u32, dimension: usize) -> u32 {
+    raw_reversed(index, dimension).reverse_bits()
+}
+
+/// [`raw`] with its bits reversed: the XOR of the columns of the index's set bits (one step per
+/// set bit).
+#[inline]
+fn raw_reversed(index: u32, dimension: usize) -> u32 {
+    let columns = &REVERSED[dimension];
+    let (mut i, mut x) = (index, 0u32);
+    while i != 0 {
+        x ^= columns[i.trailing_zeros() as usize];
+        i &= i - 1;
     }
     x
 }
@@ -107,7 +127,7 @@ fn hash64(mut z: u64) -> u64 {
 #[inline]
 pub fn sample(index: u32, dimension: usize, key: u64) -> f32 {
     let k = hash64(key ^ (dimension as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)) as u32;
-    let x = permute_upwards(raw(index, dimension).reverse_bits(), k).reverse_bits();
+    let x = permute_upwards(raw_reversed(index, dimension), k).reverse_bits();
     (x >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 

@@ -8,10 +8,10 @@
 //!
 //! Each number in one iteration is uniform over the keys (the render's seed), so every
 //! iteration's estimate keeps the independent estimator's distribution and stays unbiased; and
-//! all of a pixel's dimensions come from one sequence with one index, so each pixel's estimate
-//! converges to the integral (an earlier version drew every pair from its own shuffle of a
-//! two-dimensional sequence, which coupled the pairs so that pixels converged to values near,
-//! not at, the integral; docs/performance.md, "Stratified first vertices"). Iterations of one
+//! all of a pixel's dimensions come from one sequence with one index, so they fill their joint
+//! space together (an earlier version drew every pair from its own shuffle of a two-dimensional
+//! sequence, and its renders stopped converging at 512²; docs/performance.md, "Stratified first
+//! vertices"). `tests/primary_samples.rs` checks that each pixel converges. Iterations of one
 //! pixel are not independent of each other: a variance image computed from their spread
 //! over-estimates the variance of the mean. The tests that take their errors from that spread use
 //! independent numbers; the sequence is tested against them with errors over independent renders
@@ -35,7 +35,8 @@ pub enum PrimarySamples {
     /// Every number from the camera path's own generator (independent iterations).
     #[default]
     Independent,
-    /// The first vertices' numbers from a randomised (0,2)-sequence per pixel and dimension pair.
+    /// The first surface hit's numbers from one Owen-scrambled Sobol sequence per pixel,
+    /// indexed by the iteration ([`math::sobol`]).
     Sobol,
 }
 
@@ -92,7 +93,7 @@ impl PathDims {
     }
 
     /// The numbers of vertex `vertex` (0: the first surface hit), when it takes them from the
-    /// sequence: four dimension pairs, each keyed apart.
+    /// sequence: eight dimensions of the pixel's sequence.
     #[inline]
     pub(crate) fn vertex(&self, vertex: u32) -> Option<VertexDims> {
         match self.sequence {
