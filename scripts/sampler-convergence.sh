@@ -18,7 +18,7 @@ printf '%-12s %10s %12s\n' sampler iterations relMSE
 for sampler in independent sobol; do
     for n in 64 256 1024; do
         "$vcm" render --scene "$dir/cornell_box.xml" -a pt -i "$n" --sampler "$sampler" \
-            -o "$out/render.exr" > /dev/null
+            -o "$out/render.exr" --quiet > /dev/null 2> "$out/log" || { cat "$out/log" >&2; exit 1; }
         rel=$("$vcm" compare "$out/render.exr" "$dir/cbox_dict.exr" | awk '/relative MSE/ {print $3}')
         printf '%-12s %10d %12s\n' "$sampler" "$n" "$rel"
     done
