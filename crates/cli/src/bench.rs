@@ -138,8 +138,8 @@ fn child(args: &BenchArgs, source: &session::SceneSource, name: AlgorithmName) -
         radius_mode: args.radius_mode.mode(),
         // As `vcm render` without --variance or a checkpoint.
         variance: false,
-        // As `vcm render`'s default (`session::Request`).
-        primary_samples: render::primary_samples::PrimarySamples::Sobol,
+        // As `vcm render`'s default.
+        primary_samples: session::DEFAULT_SAMPLER,
         ..RenderSettings::default()
     };
     // The guard's estimate, made where the session makes it: after loading, before rendering.

@@ -409,8 +409,8 @@ fn render_iteration(
     radiance: impl Fn(math::Ray, &mut Rng, u64, PathDims) -> Rgb + Sync,
 ) -> u64 {
     let width = frame.width as usize;
-    // Independent of the sequence: an offset sequence over the same index would be coupled to
-    // the pixels' dimensions (math::sobol).
+    // Independent numbers also with the sequence: drawing the offset from dimensions of its own
+    // did not lower the noise (docs/performance.md, "Stratified first vertices").
     let film_offset = splat_frame::film_offset(seed, iteration);
     let rejected = frame
         .pixels
@@ -419,8 +419,9 @@ fn render_iteration(
         .map(|(y, row)| {
             let mut rejected = 0u64;
             for (x, pixel) in row.iter_mut().enumerate() {
-                let index = (y * width + x) as u64;
-                let mut rng = splat_frame::camera_stream(seed, iteration, y * width + x);
+                let flat = y * width + x;
+                let index = flat as u64;
+                let mut rng = splat_frame::camera_stream(seed, iteration, flat);
                 let dims = PathDims::new(samples, seed, index, iteration);
                 // Raster position through the filter (weight 1 for the box and when
                 // splatting), then the lens.

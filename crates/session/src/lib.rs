@@ -33,7 +33,7 @@ pub use budget::{Checkpointing, checkpoint_saver, run_budget};
 pub use live::Live;
 pub use prepare::{Prepared, resolve_russian_roulette};
 pub use render::progressive::Progressive;
-pub use request::{Request, radius_mode_from_name, radius_mode_name};
+pub use request::{DEFAULT_SAMPLER, Request, radius_mode_from_name, radius_mode_name};
 pub use run::{DEFAULT_ITERATIONS, Observer, Outcome, render, render_on};
 pub use source::{LoadedScene, SceneSource, load_scene, scene_source};
 pub use summary::Summary;

@@ -14,6 +14,11 @@ use render::{Algorithm, RenderSettings};
 use crate::slice::SliceSpec;
 use crate::source::SceneSource;
 
+/// The front ends' `pt` sampler (`--sampler`, `sampler=`): the stratified sequence, which has
+/// less noise per sample. Not the engine's default (`render::RenderSettings`: independent
+/// numbers, which its statistical tests need).
+pub const DEFAULT_SAMPLER: PrimarySamples = PrimarySamples::Sobol;
+
 /// Everything a render session needs. [`Request::new`] gives the command line's defaults.
 #[derive(Clone, Debug)]
 pub struct Request {
@@ -137,8 +142,7 @@ impl Request {
             russian_roulette: Some(RussianRoulette::Albedo),
             heuristic: defaults.heuristic,
             light_sampler: defaults.light_sampler,
-            // Not the engine's default (independent, for its statistical tests): less noise.
-            sampler: PrimarySamples::Sobol,
+            sampler: DEFAULT_SAMPLER,
             film: None,
             summation: None,
             slice: None,
