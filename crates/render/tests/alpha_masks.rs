@@ -12,7 +12,7 @@
 //!    image is half the unoccluded one, and the pooled tests of pt and BPT would detect a 2 %
 //!    bias (light tracing, with few useful light paths here, only a larger one).
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -13,7 +13,7 @@
 //!   that any primary ray (through the whole filter support and lens) sees an emitter from
 //!   are left out of its comparison.
 
-mod common;
+use crate::common;
 
 use common::{BlockEstimate, block_estimate, settings};
 use math::{Ray, Rng, Vec2, Vec3};

@@ -14,7 +14,7 @@
 //! Z-tests at family-wise α = 1e-3 (Šidák); each test also asserts the smallest relative bias
 //! it would reject (`common::detectable_bias`).
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -44,7 +44,7 @@
 //! (measured 2026-11-28 with this module's functions): the tail still pulls the worst entries
 //! low, so fewer iterations are not a fair test of bpm, and this budget is.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

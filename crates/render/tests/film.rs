@@ -15,7 +15,7 @@
 //! * Determinism across thread counts for every algorithm, the box filter bit-identical in both
 //!   modes, and technique images summing to the frame in splat mode.
 
-mod common;
+use crate::common;
 
 use common::{BlockEstimate, block_estimate, settings};
 use math::{Rng, Vec2, Vec3};
@@ -344,7 +344,7 @@ fn mean_variance(scene: &Scene, algorithm: &str, iterations: u64) -> f64 {
 /// tracer. The box must
 /// give exactly 1 (the same image); the other ratios are printed.
 #[test]
-#[ignore = "slow: measurement for docs/film.md (cargo test -p render --test film -- --ignored --nocapture)"]
+#[ignore = "slow: measurement for docs/film.md (cargo test -p render --test integration film:: -- --ignored --nocapture)"]
 fn measure_variance_splat_against_fis() {
     let filters = [("box", Filter::Box), ("tent r=1.5", tent(1.5)), ("gaussian σ=0.5 r=2", gaussian(0.5, 2.0))];
     for (mask, scene_name) in cornell::BUILTIN_SCENES.map(|s| (s.mask, s.name)) {

@@ -18,7 +18,7 @@
 //! so the image mean per channel over iterations, with its standard error, supports a Z-test
 //! against the exact value (Šidák-corrected, family-wise α = 1e-3).
 
-mod common;
+use crate::common;
 
 use render::driver::Budget;
 use render::{Algorithm, RenderSettings};

@@ -6,7 +6,7 @@
 //! Z-test) and on the pooled channel means, and the pooled comparison detects a relative bias of
 //! a few percent (asserted).
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

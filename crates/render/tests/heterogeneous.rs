@@ -12,7 +12,7 @@
 //! Every check compares a mean with its standard error (fixed seeds, |z| < 4.5) and shows that
 //! the same data reject a truth scaled by 1.02 (tracking) or 1.03 (furnace).
 
-mod common;
+use crate::common;
 
 use std::sync::Arc;
 

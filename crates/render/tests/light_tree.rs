@@ -7,7 +7,7 @@
 //! The same comparison with a scattering medium sphere on the floor exercises the volumetric
 //! path tracer (medium vertices pick lights with no normal).
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -8,7 +8,7 @@
 //! comparison detects a relative bias of a few percent (asserted). Which quarters are opaque
 //! is read from the masked scene itself (rays cast up through each quarter).
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

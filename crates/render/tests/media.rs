@@ -13,7 +13,7 @@
 //! standard error (fixed seeds, |z| < 4.5 for every channel), and shows that the same data
 //! reject a truth scaled by 1.03 (the power of the test).
 
-mod common;
+use crate::common;
 
 use common::medium_sphere::{View, medium_sphere};
 use math::{Ray, Rng, Vec3};

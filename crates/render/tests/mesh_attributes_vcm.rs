@@ -11,7 +11,7 @@
 //! path is `light_vertex::tests::stored_vertices_rebuild_attribute_bsdfs`; this test shows the
 //! whole engine stays consistent with it.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -13,9 +13,7 @@
 // Loops run over vertex numbers x_i of the path notation, which index several arrays.
 #![allow(clippy::needless_range_loop)]
 
-#[path = "common/mis_surface.rs"]
-mod mis_surface;
-
+use crate::common::mis_surface;
 use math::{Frame, PI, Rng, Vec3};
 use mis_surface::{facing_normal, materials, random_unit, reference_bsdf};
 use render::vcm::mis::{self, ConnectionPdfs, MisConstants, NeePdfs, SubPathMis};

@@ -23,15 +23,7 @@
 
 #![allow(clippy::needless_range_loop)]
 
-#[path = "common/medium_sphere.rs"]
-mod medium_sphere;
-#[path = "common/mis_media_path.rs"]
-mod mis_media_path;
-#[path = "common/mis_surface.rs"]
-mod mis_surface;
-#[path = "common/sphere_room.rs"]
-mod sphere_room;
-
+use crate::common::{medium_sphere, mis_media_path};
 use math::{Rng, Vec3};
 use medium_sphere::{View, medium_sphere};
 use mis_media_path::{LightKind, Piece, TestPath, media, random_medium};

@@ -15,7 +15,7 @@
 //! block test for merging algorithms, as in `vcm_consistency.rs` (the image means keep every
 //! pixel); the test prints how many blocks remain and fails when fewer than half do.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

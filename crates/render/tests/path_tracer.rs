@@ -2,7 +2,7 @@
 //! radiance of an emitter seen directly, an estimator without next-event estimation (which
 //! shares no MIS weights with the full one), and determinism across thread counts.
 
-mod common;
+use crate::common;
 
 use math::{Rng, Vec2};
 use render::driver::Budget;

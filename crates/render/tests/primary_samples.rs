@@ -2,14 +2,14 @@
 //! against its independent numbers: the same expected image (a Z-test per block, its errors
 //! from independent renders, with a power check), and less noise per sample.
 //!
-//! Measured (`cargo test --release -p render --test primary_samples -- --nocapture`): the
+//! Measured (`cargo test --release -p render --test integration primary_samples:: -- --nocapture`): the
 //! variance ratios and detectable biases are printed.
 //!
 //! With the sequence the iterations of one pixel are not independent, so a render's own
 //! per-iteration spread is not its error. Independent renders (different seeds scramble the
 //! sequence independently) are: every error below comes from the spread over seeds.
 
-mod common;
+use crate::common;
 
 use render::driver::Budget;
 use render::primary_samples::PrimarySamples;

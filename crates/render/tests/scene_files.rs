@@ -4,7 +4,7 @@
 //! Mitsuba twin; a GGX conductor of F = 1 in a furnace loses energy only through its
 //! single-scattering model.
 
-mod common;
+use crate::common;
 
 use scene::microfacet::Distribution;
 use std::path::PathBuf;

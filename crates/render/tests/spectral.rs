@@ -17,7 +17,7 @@
 //! iterations with standard errors from the spread of the iterations support Z-tests
 //! (Šidák-corrected, family-wise α = 1e-3 per test function).
 
-mod common;
+use crate::common;
 
 use math::{Vec2, Vec3};
 use render::driver::{Budget, Renderer};

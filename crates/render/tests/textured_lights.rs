@@ -8,7 +8,7 @@
 //! samplers, so the two agreeing checks one against the other. In spectral mode BPT renders
 //! the textured rectangle like the RGB path tracer (textures upsampled per lookup).
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -44,7 +44,7 @@
 //! [`common::detectable_bias`], the smallest relative bias of the tested estimate that the same
 //! test rejects, and each test asserts a bound on it (stated at the test).
 
-mod common;
+use crate::common;
 
 use common::comparison::Comparison;
 use common::{BlockEstimate, BlockView, block_estimate, block_views, settings};

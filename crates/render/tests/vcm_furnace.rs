@@ -19,7 +19,7 @@
 //! `merging_algorithms_resolve_a_2_percent_bias` runs them with 8 × the iterations and asserts
 //! 2 % (measured 1.1–1.7 %).
 
-mod common;
+use crate::common;
 
 use render::driver::{Budget, Renderer};
 use render::{Algorithm, RenderSettings};

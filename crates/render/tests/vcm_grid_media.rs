@@ -16,7 +16,7 @@
 //! the per-block tests above are not sensitive enough to see every MIS inconsistency: `P̂`
 //! instead of `D̂` at a connection's medium end passes them, and fails this one).
 
-mod common;
+use crate::common;
 
 use common::BlockEstimate;
 use common::sphere_room::sphere;

@@ -22,7 +22,7 @@
 //! took the camera's medium as theirs and scattered in the vacuum around the sphere; bpt then
 //! gave 0.712 ± 0.002 instead of 0.700 on the camera-inside furnace at a length limit of 2.
 
-mod common;
+use crate::common;
 
 use common::medium_sphere::{View, medium_sphere};
 use common::sphere_room::sphere;

@@ -4,7 +4,7 @@
 //! mode's determinism across thread counts (its equality with the default mode is tested bit
 //! for bit in `vcm_memory.rs`).
 
-mod common;
+use crate::common;
 
 use common::{BlockEstimate, block_estimate, block_views, detectable_bias, settings};
 use render::RenderSettings;

@@ -8,7 +8,7 @@
 //! the scene's bounding-sphere radius (the rule before, 1000 times larger) merging blurs the
 //! light's peak and the same test fails.
 
-mod common;
+use crate::common;
 
 use common::{block_estimate, detectable_bias, settings};
 use math::Vec3;

@@ -10,6 +10,8 @@
 //!   by quadrature.
 //! - [`temp_dir`]: [`TempDir`], a scratch directory under the system temp dir that is removed
 //!   when the guard is dropped (kept if `VCM_KEEP_TEST_DIRS` is set, to inspect a failing test).
+//! - [`test_files`]: [`assert_every_test_file_compiled`], the guard of the crates whose
+//!   integration tests are modules of one `tests/main.rs`.
 //!
 //! Every test is deterministic: samplers draw from a [`math::Rng`] seeded by the caller, so a
 //! test that passes once passes always. Choose significance levels (say `1e-3`, Šidák-corrected
@@ -19,6 +21,7 @@ pub mod chi2;
 pub mod mitsuba_maps;
 pub mod stats;
 pub mod temp_dir;
+pub mod test_files;
 
 pub use chi2::{
     Chi2Outcome, Integration, MIN_EXPECTED, PDF_INTEGRAL_TOLERANCE, assert_chi2, chi2_sphere, chi2_sphere_with,
@@ -26,3 +29,4 @@ pub use chi2::{
 };
 pub use stats::{MeanVar, ZTestOutcome, sidak, t_test_p, welch_dof, z_test_entries, z_test_p};
 pub use temp_dir::TempDir;
+pub use test_files::assert_every_test_file_compiled;

@@ -5,6 +5,8 @@
 
 pub mod comparison;
 pub mod medium_sphere;
+pub mod mis_media_path;
+pub mod mis_surface;
 pub mod sphere_room;
 
 use math::{RAY_EPSILON, Ray, Vec2, Vec3};
