@@ -1,6 +1,6 @@
-//! The `cli` crate's integration tests, compiled and linked as one binary instead of one
-//! per file (docs/testing.md, "One test binary per crate"). Each file of this directory is a
-//! module here; `every_test_file_is_compiled` fails when one is not.
+//! The `vcm` package's integration tests, compiled and linked as one binary instead of one per
+//! file (docs/testing.md, "The test build: one test binary per crate"). Each file of this
+//! directory is a module here; `every_test_file_is_compiled` fails when one is not.
 
 mod cli;
 mod compare;
@@ -10,5 +10,5 @@ mod report;
 
 #[test]
 fn every_test_file_is_compiled() {
-    testkit::assert_every_test_file_compiled(env!("CARGO_MANIFEST_DIR"), include_str!("main.rs"));
+    testkit::assert_every_test_file_compiled(env!("CARGO_MANIFEST_DIR"));
 }

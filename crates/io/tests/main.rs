@@ -1,6 +1,6 @@
-//! The `io` crate's integration tests, compiled and linked as one binary instead of one
-//! per file (docs/testing.md, "One test binary per crate"). Each file of this directory is a
-//! module here; `every_test_file_is_compiled` fails when one is not.
+//! The `vcm-io` package's integration tests, compiled and linked as one binary instead of one per
+//! file (docs/testing.md, "The test build: one test binary per crate"). Each file of this
+//! directory is a module here; `every_test_file_is_compiled` fails when one is not.
 
 mod alpha_masks;
 mod bsdf_maps;
@@ -30,5 +30,5 @@ mod texture_formats;
 
 #[test]
 fn every_test_file_is_compiled() {
-    testkit::assert_every_test_file_compiled(env!("CARGO_MANIFEST_DIR"), include_str!("main.rs"));
+    testkit::assert_every_test_file_compiled(env!("CARGO_MANIFEST_DIR"));
 }

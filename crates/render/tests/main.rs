@@ -1,6 +1,6 @@
-//! The `render` crate's integration tests, compiled and linked as one binary instead of one
-//! per file (docs/testing.md, "One test binary per crate"). Each file of this directory is a
-//! module here; `every_test_file_is_compiled` fails when one is not.
+//! The `render` package's integration tests, compiled and linked as one binary instead of one per
+//! file (docs/testing.md, "The test build: one test binary per crate"). Each file of this
+//! directory is a module here; `every_test_file_is_compiled` fails when one is not.
 //! `vcm_memory.rs` stays a binary of its own (a `[[test]]` in Cargo.toml): it reads
 //! its own process's peak memory, which the other tests would inflate.
 
@@ -43,5 +43,5 @@ mod volume_radius;
 
 #[test]
 fn every_test_file_is_compiled() {
-    testkit::assert_every_test_file_compiled(env!("CARGO_MANIFEST_DIR"), include_str!("main.rs"));
+    testkit::assert_every_test_file_compiled(env!("CARGO_MANIFEST_DIR"));
 }

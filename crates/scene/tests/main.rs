@@ -1,6 +1,6 @@
-//! The `scene` crate's integration tests, compiled and linked as one binary instead of one
-//! per file (docs/testing.md, "One test binary per crate"). Each file of this directory is a
-//! module here; `every_test_file_is_compiled` fails when one is not.
+//! The `scene` package's integration tests, compiled and linked as one binary instead of one per
+//! file (docs/testing.md, "The test build: one test binary per crate"). Each file of this
+//! directory is a module here; `every_test_file_is_compiled` fails when one is not.
 
 mod alpha;
 mod bsdf;
@@ -25,5 +25,5 @@ mod textured_lights;
 
 #[test]
 fn every_test_file_is_compiled() {
-    testkit::assert_every_test_file_compiled(env!("CARGO_MANIFEST_DIR"), include_str!("main.rs"));
+    testkit::assert_every_test_file_compiled(env!("CARGO_MANIFEST_DIR"));
 }

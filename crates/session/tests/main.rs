@@ -1,6 +1,6 @@
-//! The `session` crate's integration tests, compiled and linked as one binary instead of one
-//! per file (docs/testing.md, "One test binary per crate"). Each file of this directory is a
-//! module here; `every_test_file_is_compiled` fails when one is not.
+//! The `session` package's integration tests, compiled and linked as one binary instead of one per
+//! file (docs/testing.md, "The test build: one test binary per crate"). Each file of this
+//! directory is a module here; `every_test_file_is_compiled` fails when one is not.
 
 mod distributed;
 mod film;
@@ -11,5 +11,5 @@ mod stepping;
 
 #[test]
 fn every_test_file_is_compiled() {
-    testkit::assert_every_test_file_compiled(env!("CARGO_MANIFEST_DIR"), include_str!("main.rs"));
+    testkit::assert_every_test_file_compiled(env!("CARGO_MANIFEST_DIR"));
 }

@@ -1,21 +1,22 @@
 //! A guard for crates whose integration tests are compiled into one binary.
 //!
-//! Cargo builds and links every `tests/*.rs` file as a binary of its own; with ~100 such files
-//! the workspace's test build spent more time linking than running (docs/testing.md, "One test
-//! binary per crate"). The crates therefore set `autotests = false` and declare one `[[test]]`
+//! Cargo builds and links every `tests/*.rs` file as a binary of its own; with 92 such files a
+//! clean test build took longer than running the tests (docs/testing.md, "The test build: one
+//! test binary per crate"). The crates therefore set `autotests = false` and declare one `[[test]]`
 //! whose root, `tests/main.rs`, lists the files as modules. A file left out of that list would
 //! silently never compile nor run; [`assert_every_test_file_compiled`] makes that a failure.
 
 use std::path::Path;
 
 /// Panics, naming the files, unless every `*.rs` file directly in `<manifest_dir>/tests` is
-/// either declared as a module (`mod <stem>;`) in `main_source` (the text of `tests/main.rs`)
-/// or is the `path` of a `[[test]]` target of its own in `<manifest_dir>/Cargo.toml`.
+/// either declared as a module (`mod <stem>;`) in `<manifest_dir>/tests/main.rs` or is the
+/// `path` of a `[[test]]` target of its own in `<manifest_dir>/Cargo.toml`.
 ///
-/// Call it from a test in `tests/main.rs` with `env!("CARGO_MANIFEST_DIR")` and
-/// `include_str!("main.rs")`.
-pub fn assert_every_test_file_compiled(manifest_dir: &str, main_source: &str) {
+/// Call it from a test in `tests/main.rs` with `env!("CARGO_MANIFEST_DIR")`.
+pub fn assert_every_test_file_compiled(manifest_dir: &str) {
     let dir = Path::new(manifest_dir).join("tests");
+    let main_source = std::fs::read_to_string(dir.join("main.rs"))
+        .unwrap_or_else(|e| panic!("cannot read {}/main.rs: {e}", dir.display()));
     let manifest = std::fs::read_to_string(Path::new(manifest_dir).join("Cargo.toml"))
         .unwrap_or_else(|e| panic!("cannot read {manifest_dir}/Cargo.toml: {e}"));
     let entries = std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()));
