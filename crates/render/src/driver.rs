@@ -5,6 +5,7 @@
 //! `Rng::for_stream(seed, iteration, pixel)`, and each pixel's iterations are summed in order,
 //! so the image does not depend on the number of threads.
 
+use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
@@ -202,7 +203,8 @@ enum Integrator {
 pub struct Renderer<'a> {
     scene: &'a Scene,
     settings: RenderSettings,
-    pool: rayon::ThreadPool,
+    /// Shared with [`Renderer::in_pool`]'s caller while it runs.
+    pool: Arc<rayon::ThreadPool>,
     integrator: Integrator,
     frame: FrameBuffer,
     iteration: u64,
@@ -219,6 +221,7 @@ impl<'a> Renderer<'a> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(settings.threads)
             .build()
+            .map(Arc::new)
             .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
         let max_materials = crate::vcm::light_vertex::MAX_MATERIAL as usize + 1;
         if settings.vcm_settings().is_some() && scene.materials.len() > max_materials {
@@ -289,6 +292,16 @@ impl<'a> Renderer<'a> {
         rejected
     }
 
+    /// Runs `f` on one of the renderer's worker threads, where each [`Renderer::step`] starts
+    /// its iteration on the spot. A step called from outside the pool hands the iteration to a
+    /// worker and sleeps until it is done: a cross-thread round trip per iteration, which costs
+    /// as much as the rendering itself on an 8 × 8 image (docs/testing.md, "Trimmed
+    /// dependencies and cheaper tests"). The images are the same bit for bit.
+    pub fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut Self) -> R + Send) -> R {
+        let pool = Arc::clone(&self.pool);
+        pool.install(|| f(self))
+    }
+
     /// Makes `iteration` the next iteration to render (any index: an iteration is a function
     /// of the seed and its index, so a distributed render starts each rank anywhere).
     pub fn seek(&mut self, iteration: u64) {
@@ -315,6 +328,11 @@ impl<'a> Renderer<'a> {
     /// Iterations rendered so far.
     pub fn iterations(&self) -> u64 {
         self.iteration
+    }
+
+    /// The worker threads' pool (for [`Progressive::in_pool`]).
+    pub(crate) fn pool(&self) -> Arc<rayon::ThreadPool> {
+        Arc::clone(&self.pool)
     }
 
     /// Worker threads.

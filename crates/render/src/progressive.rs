@@ -120,6 +120,13 @@ impl<'a> Progressive<'a> {
         Ok(())
     }
 
+    /// Runs `f` on one of the renderer's worker threads ([`Renderer::in_pool`]): the steps
+    /// inside it do not each wait for a worker to wake.
+    pub fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut Self) -> R + Send) -> R {
+        let pool = self.renderer.pool();
+        pool.install(|| f(self))
+    }
+
     /// Renders global iteration `iteration` (any index: a function of the seed and the index
     /// only) without touching the film; [`Progressive::add_result`] adds it.
     pub fn render_iteration(&mut self, iteration: u64) -> IterationResult {
@@ -284,35 +291,49 @@ pub fn run_budget(
     let start = Instant::now();
     let mut last_checkpoint = Instant::now();
     let first_iteration = progressive.next_iteration();
-    let mut interrupted = false;
-    loop {
-        let iteration = progressive.next_iteration();
-        match settings.budget {
-            Budget::Iterations(n) if iteration >= n => break,
-            Budget::Time(limit) if iteration > first_iteration && start.elapsed() >= limit => break,
-            _ => {}
-        }
-        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
-            interrupted = true;
-            break;
-        }
-        progressive.step()?;
-        if let Some((every, save)) = &mut checkpoint
-            && last_checkpoint.elapsed() >= *every
-        {
-            save(progressive.film())?;
-            last_checkpoint = Instant::now();
-        }
-        if let Some(bar) = &progress {
-            match settings.budget {
-                Budget::Iterations(_) => bar.set_position(iteration + 1),
-                Budget::Time(_) => {
-                    bar.set_position(start.elapsed().as_millis() as u64);
-                    bar.set_message(format!("{} it", iteration + 1));
+    let every = checkpoint.as_ref().map(|(every, _)| *every);
+    // The iterations run inside the renderer's pool ([`Progressive::in_pool`]), which they
+    // leave only when a checkpoint is due (the saver need not be `Send`) or at the end.
+    let interrupted = loop {
+        let pause = progressive.in_pool(|progressive| {
+            loop {
+                let iteration = progressive.next_iteration();
+                match settings.budget {
+                    Budget::Iterations(n) if iteration >= n => return Ok(Pause::Done),
+                    Budget::Time(limit) if iteration > first_iteration && start.elapsed() >= limit => {
+                        return Ok(Pause::Done);
+                    }
+                    _ => {}
+                }
+                if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+                    return Ok(Pause::Stopped);
+                }
+                progressive.step()?;
+                if let Some(bar) = &progress {
+                    match settings.budget {
+                        Budget::Iterations(_) => bar.set_position(iteration + 1),
+                        Budget::Time(_) => {
+                            bar.set_position(start.elapsed().as_millis() as u64);
+                            bar.set_message(format!("{} it", iteration + 1));
+                        }
+                    }
+                }
+                if every.is_some_and(|every| last_checkpoint.elapsed() >= every) {
+                    return Ok::<_, String>(Pause::Checkpoint);
                 }
             }
+        })?;
+        match pause {
+            Pause::Done => break false,
+            Pause::Stopped => break true,
+            Pause::Checkpoint => {
+                if let Some((_, save)) = &mut checkpoint {
+                    save(progressive.film())?;
+                }
+                last_checkpoint = Instant::now();
+            }
         }
-    }
+    };
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
@@ -320,6 +341,16 @@ pub fn run_budget(
         save(progressive.film())?;
     }
     Ok(interrupted)
+}
+
+/// Why [`run_budget`]'s loop left the pool.
+enum Pause {
+    /// The budget is spent.
+    Done,
+    /// The stop flag was set.
+    Stopped,
+    /// A checkpoint is due.
+    Checkpoint,
 }
 
 /// A progress bar on stderr when asked for and stderr is a terminal.
