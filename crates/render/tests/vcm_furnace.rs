@@ -11,13 +11,11 @@
 //!
 //! **Power.** Every Z-test is also run on the same estimates scaled by `1 ± β`
 //! ([`common::detectable_bias`]) to find the smallest relative bias `β` it rejects, which is
-//! asserted: at most 2 % for every unbiased algorithm (pt, lt, bpt, vcm; measured at most
-//! 1.2 %, lt for K = 2) and for the merging ones (ppm, bpm) in the mixed-material test
-//! (measured 1.6 %). The merging algorithms of the geometric-series test see only 2.3–3.8 % at
-//! their default-tier sample count (standard errors of 0.5–0.7 % of the value, against a
-//! Šidák critical |z| of 5.0; asserted: 5 %); the slow tier's
-//! `merging_algorithms_resolve_a_2_percent_bias` runs them with 8 × the iterations and asserts
-//! 2 % (measured 1.1–1.7 %).
+//! asserted: at most 2 % for every algorithm. Measured (2026-11-30): pt, bpt and vcm at most
+//! 1.01 % (500 iterations; 0.42 % at the 2000 they had before), lt 1.86 % (K = 1; 4000
+//! iterations). The merging algorithms (ppm, bpm) run every case only in the slow tier's
+//! `merging_algorithms_resolve_a_2_percent_bias` (800 iterations; measured 1.1–1.7 %) and, in
+//! the default tier, the mixed-material test (150 iterations; ppm 1.65 %, bpm 1.48 %).
 
 use crate::common;
 
@@ -56,27 +54,29 @@ const BLOCKS: u32 = 8;
 // below the standard errors reached here (≈ 5e-3 of the value for the image mean, ≈ 4e-2 for
 // a block). The price of the small radius is variance (few photons per merge), paid for with a
 // larger image: the number of photons in a merging disc grows with the number of light paths.
+//
+// pt, bpt and vcm detected at most 0.42 % at 2000 iterations (2026-11-30), a fifth of the 2 %
+// asserted: a quarter of the iterations doubles that (the detectable bias scales as 1/√N).
 const NON_MERGING: [Run; 4] = [
-    Run { algorithm: "pt", resolution: 16, iterations: 2000, radius_factor: 1e-3 },
-    // Light tracing is noisier per path (1.8 % detectable at 2000 iterations): twice as many.
+    Run { algorithm: "pt", resolution: 16, iterations: 500, radius_factor: 1e-3 },
+    // Light tracing is noisier per path (1.86 % detectable at 4000 iterations for K = 1).
     Run { algorithm: "lt", resolution: 16, iterations: 4000, radius_factor: 1e-3 },
-    Run { algorithm: "bpt", resolution: 16, iterations: 2000, radius_factor: 1e-3 },
+    Run { algorithm: "bpt", resolution: 16, iterations: 500, radius_factor: 1e-3 },
     // VCM at a small radius: the merges get small MIS weights but are all evaluated.
-    Run { algorithm: "vcm", resolution: 16, iterations: 2000, radius_factor: 1e-3 },
+    Run { algorithm: "vcm", resolution: 16, iterations: 500, radius_factor: 1e-3 },
 ];
+/// The merging runs of the mixed-material test (default tier): at 100 iterations ppm detected
+/// 1.98 % there (2026-11-30), too close to the 2 % asserted; at 150, 1.65 % (bpm 1.48 %).
 const MERGING: [Run; 2] = [
-    Run { algorithm: "ppm", resolution: 128, iterations: 100, radius_factor: 1e-3 },
-    Run { algorithm: "bpm", resolution: 128, iterations: 100, radius_factor: 1e-3 },
+    Run { algorithm: "ppm", resolution: 128, iterations: 150, radius_factor: 1e-3 },
+    Run { algorithm: "bpm", resolution: 128, iterations: 150, radius_factor: 1e-3 },
 ];
 /// The merging runs of the slow tier, with the power to see a 2 % bias.
 const MERGING_POWERED: [Run; 2] = [
     Run { algorithm: "ppm", resolution: 128, iterations: 800, radius_factor: 1e-3 },
     Run { algorithm: "bpm", resolution: 128, iterations: 800, radius_factor: 1e-3 },
 ];
-/// Smallest relative bias the geometric-series test must detect with the default-tier merging
-/// runs (see the module documentation).
-const MERGING_DEFAULT_POWER: f64 = 0.05;
-/// Smallest relative bias every other test here must detect.
+/// Smallest relative bias every test here must detect.
 const POWER: f64 = 0.02;
 
 /// (Le, ρ, K) cases.
@@ -102,19 +102,21 @@ fn statistics(scene: &scene::Scene, max_length: u32, run: &Run, seed: u64) -> Ve
     let (size, block) = (run.resolution as usize, (run.resolution / BLOCKS) as usize);
     let blocks = (BLOCKS * BLOCKS) as usize;
     let mut stats = vec![MeanVar::new(); blocks + 1];
-    for _ in 0..run.iterations {
-        assert_eq!(renderer.step(), 0, "{}: rejected samples", run.algorithm);
-        let mut sums = vec![0.0f64; blocks];
-        for (i, p) in renderer.frame().pixels.iter().enumerate() {
-            let (x, y) = (i % size, i / size);
-            sums[(y / block) * BLOCKS as usize + x / block] += p.to_array().iter().map(|&v| v as f64).sum::<f64>();
+    renderer.in_pool(|renderer| {
+        for _ in 0..run.iterations {
+            assert_eq!(renderer.step(), 0, "{}: rejected samples", run.algorithm);
+            let mut sums = vec![0.0f64; blocks];
+            for (i, p) in renderer.frame().pixels.iter().enumerate() {
+                let (x, y) = (i % size, i / size);
+                sums[(y / block) * BLOCKS as usize + x / block] += p.to_array().iter().map(|&v| v as f64).sum::<f64>();
+            }
+            let per_block = (block * block * 3) as f64;
+            for (s, sum) in stats.iter_mut().zip(&sums) {
+                s.push(sum / per_block);
+            }
+            stats[blocks].push(sums.iter().sum::<f64>() / (size * size * 3) as f64);
         }
-        let per_block = (block * block * 3) as f64;
-        for (s, sum) in stats.iter_mut().zip(&sums) {
-            s.push(sum / per_block);
-        }
-        stats[blocks].push(sums.iter().sum::<f64>() / (size * size * 3) as f64);
-    }
+    });
     stats
 }
 
@@ -160,10 +162,14 @@ fn geometric_series(runs: &[(&Run, f64)]) {
     assert!(failures.is_empty(), "furnace failures:\n{}", failures.join("\n"));
 }
 
+/// pt, lt, bpt and vcm on every case. The merging algorithms run every case in the slow tier
+/// ([`merging_algorithms_resolve_a_2_percent_bias`], 8 × the iterations this test gave them
+/// until 2026-11-30, when it asserted only a 5 % bias) and in the default tier the
+/// mixed-material furnace ([`mixed_diffuse_and_mirror_material_gives_the_geometric_series`],
+/// 2 %).
 #[test]
 fn every_algorithm_gives_the_geometric_series() {
-    let non_merging = NON_MERGING.iter().map(|r| (r, POWER));
-    geometric_series(&non_merging.chain(MERGING.iter().map(|r| (r, MERGING_DEFAULT_POWER))).collect::<Vec<_>>());
+    geometric_series(&NON_MERGING.iter().map(|r| (r, POWER)).collect::<Vec<_>>());
 }
 
 #[test]

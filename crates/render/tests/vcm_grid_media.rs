@@ -21,7 +21,7 @@ use crate::common;
 use common::BlockEstimate;
 use common::sphere_room::sphere;
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use math::Vec3;
 use render::RenderSettings;
@@ -145,6 +145,15 @@ fn matches_pt(algorithm: &str, got: &BlockEstimate, pt: &BlockEstimate) {
     assert!(detectable < POWER, "{algorithm}: no power, detects only {:.2} %", 100.0 * detectable);
 }
 
+/// The pt reference of the chromatic grid room with the light in front (1000 iterations, seed 5),
+/// rendered once for the three tests that compare against it (bpt and vcm, bpm, ppm): the same
+/// estimate each of them rendered before, bit for bit (the image does not depend on the
+/// thread count or on what else runs).
+fn chromatic_pt() -> &'static BlockEstimate {
+    static PT: OnceLock<BlockEstimate> = OnceLock::new();
+    PT.get_or_init(|| estimate(&grid_room(blob(true), 32, false), "pt", false, 0.0, 1000, 5))
+}
+
 /// The merging radius factor (r_0 = factor × 2 × 16 ≈ 1 scene unit at 32², as in
 /// `tests/vcm_media.rs`, so merges carry a large share of the image).
 const VCM_RADIUS_FACTOR: f32 = 0.03;
@@ -153,9 +162,9 @@ const VCM_RADIUS_FACTOR: f32 = 0.03;
 #[test]
 fn bpt_vcm_match_pt_in_a_chromatic_grid_room() {
     let scene = grid_room(blob(true), 32, false);
-    let pt = estimate(&scene, "pt", false, 0.0, 1000, 5);
-    matches_pt("bpt", &estimate(&scene, "bpt", false, 0.003, 500, 6), &pt);
-    matches_pt("vcm", &estimate(&scene, "vcm", false, VCM_RADIUS_FACTOR, 800, 7), &pt);
+    let pt = chromatic_pt();
+    matches_pt("bpt", &estimate(&scene, "bpt", false, 0.003, 500, 6), pt);
+    matches_pt("vcm", &estimate(&scene, "vcm", false, VCM_RADIUS_FACTOR, 800, 7), pt);
 }
 
 /// Light tracing alone (only the t = 1 connections through grid pieces, with ratio tracking,
@@ -168,12 +177,14 @@ fn lt_matches_pt_in_a_chromatic_grid_room() {
     matches_pt("lt", &estimate(&scene, "lt", false, 0.0, 4000, 6), &pt);
 }
 
-/// Spectral mode, a one-channel grid with a chromatic tint: bpt and vcm against pt.
+/// Spectral mode, a one-channel grid with a chromatic tint: bpt and vcm against pt. bpt at 1000
+/// iterations detects a 1.93 % bias of the image mean (at 2000 it detected 1.49 %; the bound is
+/// [`POWER`], 4 %).
 #[test]
 fn bpt_vcm_match_pt_in_a_tinted_grid_room_spectral() {
     let scene = grid_room(blob(false), 32, false);
     let pt = estimate(&scene, "pt", true, 0.0, 4000, 5);
-    matches_pt("bpt", &estimate(&scene, "bpt", true, 0.003, 2000, 6), &pt);
+    matches_pt("bpt", &estimate(&scene, "bpt", true, 0.003, 1000, 6), &pt);
     matches_pt("vcm", &estimate(&scene, "vcm", true, VCM_RADIUS_FACTOR, 800, 7), &pt);
 }
 
@@ -279,8 +290,8 @@ fn sub_path_flights_and_segments_agree_on_the_surrogates() {
 #[test]
 fn bpm_matches_pt_in_a_chromatic_grid_room() {
     let scene = grid_room(blob(true), 32, false);
-    let pt = estimate(&scene, "pt", false, 0.0, 1000, 5);
-    matches_pt("bpm", &estimate(&scene, "bpm", false, 0.02, 3000, 8), &pt);
+    let pt = chromatic_pt();
+    matches_pt("bpm", &estimate(&scene, "bpm", false, 0.02, 3000, 8), pt);
 }
 
 /// ppm against pt (RGB, chromatic grid): camera paths merge at their first non-specular
@@ -290,6 +301,6 @@ fn bpm_matches_pt_in_a_chromatic_grid_room() {
 #[test]
 fn ppm_matches_pt_in_a_chromatic_grid_room() {
     let scene = grid_room(blob(true), 32, false);
-    let pt = estimate(&scene, "pt", false, 0.0, 1000, 5);
-    matches_pt("ppm", &estimate(&scene, "ppm", false, 0.02, 3000, 9), &pt);
+    let pt = chromatic_pt();
+    matches_pt("ppm", &estimate(&scene, "ppm", false, 0.02, 3000, 9), pt);
 }

@@ -91,49 +91,69 @@ fn samplers_match_their_pdfs_at_every_angle() {
     chi2_cases(&[0, 1, 2, 3, 4, 5, 6], &ANGLES, 700);
 }
 
-/// Chi-square tests of the cases numbered `which` at the polar angles `angles`.
+/// Chi-square tests of the cases numbered `which` at the polar angles `angles`, each case on a
+/// thread of its own (the pdf integration runs a walk per evaluation, so a case takes seconds;
+/// the outcome does not depend on the threads: each (case, angle) has its own seed index).
 fn chi2_cases(which: &[usize], angles: &[f32], seed: u64) {
-    let point = tilted_point();
-    let n = point.shading_normal;
     let all: Vec<_> = cases().into_iter().enumerate().filter(|(i, _)| which.contains(i)).map(|(_, c)| c).collect();
     let significance = sidak(1e-3, all.len() * angles.len());
-    let mut index = seed;
-    for (name, material) in &all {
-        for &theta in angles {
-            let mode = MODES[(index % 2) as usize];
-            index += 1;
-            let fixed = direction_at(point.geometric_normal, theta, 0.7);
-            let bsdf = Bsdf::new(material, &point, fixed, mode).unwrap();
-            let frame = Frame::from_z((2.0 * fixed.dot(n) * n - fixed).normalize());
-            let mut delta: Option<(f32, u64)> = None;
-            let samples = 100_000;
-            let outcome = chi2_sphere_with(
-                |rng: &mut Rng| {
-                    let s = bsdf.sample(rng.uniform3())?;
-                    if s.lobe.is_specular() {
-                        assert_eq!(s.lobe, LobeKind::SpecularReflection);
-                        let d = delta.get_or_insert((s.pdf.forward.0, 0));
-                        assert!((d.0 - s.pdf.forward.0).abs() < 1e-6);
-                        d.1 += 1;
-                        return None;
-                    }
-                    Some(frame.to_local(s.direction))
-                },
-                |local| bsdf.evaluate(frame.to_world(local).normalize()).map_or(0.0, |e| e.pdf.forward.0 as f64),
-                samples,
-                index,
-                24,
-                32,
-                &INTEGRATION,
-            );
-            let what = format!("{name} at {theta}° ({mode:?})");
-            assert_chi2(&outcome, significance, &what);
-            if let Some((p, count)) = delta {
-                let p = p as f64;
-                let sigma = (p * (1.0 - p) / samples as f64).sqrt();
-                let freq = count as f64 / samples as f64;
-                assert!((freq - p).abs() <= 5.0 * sigma + 1e-4, "{what}: delta chosen {freq}, probability {p}");
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = all
+            .iter()
+            .enumerate()
+            .map(|(k, (name, material))| {
+                let first = seed + (k * angles.len()) as u64;
+                scope.spawn(move || chi2_case(name, material, angles, first, significance))
+            })
+            .collect();
+        for handle in handles {
+            if let Err(panic) = handle.join() {
+                std::panic::resume_unwind(panic);
             }
+        }
+    });
+}
+
+/// The chi-square tests of one case at the polar angles `angles`, with seed indices from
+/// `first` on.
+fn chi2_case(name: &str, material: &Material, angles: &[f32], first: u64, significance: f64) {
+    let point = tilted_point();
+    let n = point.shading_normal;
+    let mut index = first;
+    for &theta in angles {
+        let mode = MODES[(index % 2) as usize];
+        index += 1;
+        let fixed = direction_at(point.geometric_normal, theta, 0.7);
+        let bsdf = Bsdf::new(material, &point, fixed, mode).unwrap();
+        let frame = Frame::from_z((2.0 * fixed.dot(n) * n - fixed).normalize());
+        let mut delta: Option<(f32, u64)> = None;
+        let samples = 100_000;
+        let outcome = chi2_sphere_with(
+            |rng: &mut Rng| {
+                let s = bsdf.sample(rng.uniform3())?;
+                if s.lobe.is_specular() {
+                    assert_eq!(s.lobe, LobeKind::SpecularReflection);
+                    let d = delta.get_or_insert((s.pdf.forward.0, 0));
+                    assert!((d.0 - s.pdf.forward.0).abs() < 1e-6);
+                    d.1 += 1;
+                    return None;
+                }
+                Some(frame.to_local(s.direction))
+            },
+            |local| bsdf.evaluate(frame.to_world(local).normalize()).map_or(0.0, |e| e.pdf.forward.0 as f64),
+            samples,
+            index,
+            24,
+            32,
+            &INTEGRATION,
+        );
+        let what = format!("{name} at {theta}° ({mode:?})");
+        assert_chi2(&outcome, significance, &what);
+        if let Some((p, count)) = delta {
+            let p = p as f64;
+            let sigma = (p * (1.0 - p) / samples as f64).sqrt();
+            let freq = count as f64 / samples as f64;
+            assert!((freq - p).abs() <= 5.0 * sigma + 1e-4, "{what}: delta chosen {freq}, probability {p}");
         }
     }
 }

@@ -97,25 +97,28 @@ pub fn block_estimate(scene: &Scene, settings: &RenderSettings, iterations: u64,
     let (bx, by) = ((w / block) as usize, (h / block) as usize);
     let mut stats = vec![MeanVar::new(); bx * by * 3];
     let mut all = Vec::with_capacity(iterations as usize * bx * by * 3);
-    for _ in 0..iterations {
-        assert_eq!(renderer.step(), 0, "no rejected samples");
-        let frame = renderer.frame();
-        let mut sums = vec![0.0f64; bx * by * 3];
-        for y in 0..(by as u32 * block) {
-            for x in 0..(bx as u32 * block) {
-                let p = frame.pixels[(y * w + x) as usize];
-                let b = (y / block) as usize * bx + (x / block) as usize;
-                for (c, v) in p.to_array().into_iter().enumerate() {
-                    sums[b * 3 + c] += v as f64;
+    // In the pool: each step outside it would wait for a worker to wake (`Renderer::in_pool`).
+    renderer.in_pool(|renderer| {
+        for _ in 0..iterations {
+            assert_eq!(renderer.step(), 0, "no rejected samples");
+            let frame = renderer.frame();
+            let mut sums = vec![0.0f64; bx * by * 3];
+            for y in 0..(by as u32 * block) {
+                for x in 0..(bx as u32 * block) {
+                    let p = frame.pixels[(y * w + x) as usize];
+                    let b = (y / block) as usize * bx + (x / block) as usize;
+                    for (c, v) in p.to_array().into_iter().enumerate() {
+                        sums[b * 3 + c] += v as f64;
+                    }
                 }
             }
+            let n = (block * block) as f64;
+            for (s, sum) in stats.iter_mut().zip(sums) {
+                s.push(sum / n);
+                all.push(sum / n);
+            }
         }
-        let n = (block * block) as f64;
-        for (s, sum) in stats.iter_mut().zip(sums) {
-            s.push(sum / n);
-            all.push(sum / n);
-        }
-    }
+    });
     BlockEstimate {
         blocks_x: bx,
         means: stats.iter().map(MeanVar::mean).collect(),
