@@ -54,6 +54,8 @@ pub struct Options {
 impl Default for Options {
     /// The defaults of the Python signatures (documented in `python/vcm/__init__.pyi`).
     fn default() -> Self {
+        // The enumerated defaults are the command line's (`session::Request::new`), by name.
+        let request = session::Request::new(session::SceneSource::Builtin(0));
         Self {
             algorithm: "vcm".to_string(),
             iterations: None,
@@ -66,16 +68,16 @@ impl Default for Options {
             radius_factor: None,
             radius_alpha: None,
             volume_radius_factor: None,
-            radius_mode: "global".to_string(),
+            radius_mode: session::radius_mode_name(request.radius_mode).to_string(),
             memory_efficient: false,
             rr_depth: None,
-            heuristic: "balance".to_string(),
-            light_sampler: "tree".to_string(),
-            sampler: "sobol".to_string(),
+            heuristic: request.heuristic.name().to_string(),
+            light_sampler: request.light_sampler.name().to_string(),
+            sampler: request.sampler.name().to_string(),
             max_memory: None,
             permissive: false,
             techniques: false,
-            technique_length: 4,
+            technique_length: request.technique_length,
         }
     }
 }
