@@ -203,7 +203,7 @@ enum Integrator {
 pub struct Renderer<'a> {
     scene: &'a Scene,
     settings: RenderSettings,
-    /// Shared with [`Renderer::in_pool`]'s caller while it runs.
+    /// In an `Arc` so that [`Renderer::in_pool`] can hold it while lending `self` to its closure.
     pool: Arc<rayon::ThreadPool>,
     integrator: Integrator,
     frame: FrameBuffer,
@@ -298,7 +298,7 @@ impl<'a> Renderer<'a> {
     /// as much as the rendering itself on an 8 × 8 image (docs/testing.md, "Trimmed
     /// dependencies and cheaper tests"). The images are the same bit for bit.
     pub fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut Self) -> R + Send) -> R {
-        let pool = Arc::clone(&self.pool);
+        let pool = self.pool();
         pool.install(|| f(self))
     }
 

@@ -56,7 +56,7 @@ const BLOCKS: u32 = 8;
 // larger image: the number of photons in a merging disc grows with the number of light paths.
 //
 // pt, bpt and vcm detected at most 0.42 % at 2000 iterations (2026-11-30), a fifth of the 2 %
-// asserted: a quarter of the iterations doubles that (the detectable bias scales as 1/√N).
+// asserted; at a quarter of the iterations (the detectable bias scales as 1/√N), 1.01 %.
 const NON_MERGING: [Run; 4] = [
     Run { algorithm: "pt", resolution: 16, iterations: 500, radius_factor: 1e-3 },
     // Light tracing is noisier per path (1.86 % detectable at 4000 iterations for K = 1).
