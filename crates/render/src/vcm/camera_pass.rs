@@ -1,7 +1,9 @@
 //! The camera pass: one camera sub-path per pixel; at every vertex the emitter hit (s = 0),
 //! next-event estimation (s = 1), connections to the pixel's light sub-path (s, t > 1) and
 //! merges with all light vertices in range (s, t ≥ 2), then BSDF sampling with Russian
-//! roulette.
+//! roulette. A surface vertex's merges are usually computed after the next ray has been traced,
+//! so that the light vertices they read have arrived in the cache (same results: see "The merge
+//! after the next ray" in the loop).
 
 use math::{RAY_EPSILON, Rng, Vec3};
 use scene::camera::PrimaryDensity;
@@ -17,6 +19,7 @@ use super::subpath::{NullSurface, SubPath};
 use super::technique_images::{Record, TechniqueValues};
 use super::{Family, FamilyValues, Iteration, Techniques};
 use crate::fluorescent::{FluorescentVertex, view};
+use crate::hash_grid::GridQuery;
 use crate::path_tracer::LightSampler;
 
 /// Traces the camera sub-path through raster pixel `(x, y)` and returns its contributions by
@@ -125,16 +128,25 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     // map's sample can be prefetched while the ray to the vertex is traced (not in media, where
     // the flight draws before it).
     let hint = techniques.connect && !media_active && scene.has_prefetchable_background();
+    // The next ray's arrival and merge query when the last vertex traced it before its merge
+    // (see "The merge after the next ray" below).
+    let mut traced: Option<(Arrival, Option<GridQuery>)> = None;
 
     loop {
-        if hint {
-            LightSampler::Power.prefetch_next_event(scene, rng);
-        }
-        let arrival = if media_active {
-            let p = &mut path;
-            advance(scene, &mut p.ray, &mut p.origin_offset, &mut p.flight, &mut p.throughput, rng, w)
-        } else {
-            scene.intersect(&path.ray).map_or(Arrival::Escaped, Arrival::Surface)
+        let (arrival, planned) = match traced.take() {
+            Some(next) => next,
+            None => {
+                if hint {
+                    LightSampler::Power.prefetch_next_event(scene, rng);
+                }
+                let arrival = if media_active {
+                    let p = &mut path;
+                    advance(scene, &mut p.ray, &mut p.origin_offset, &mut p.flight, &mut p.throughput, rng, w)
+                } else {
+                    scene.intersect(&path.ray).map_or(Arrival::Escaped, Arrival::Surface)
+                };
+                (arrival, None)
+            }
         };
         if let Arrival::Medium { position, distance, medium } = arrival {
             let args = (position, distance, medium);
@@ -168,7 +180,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             break;
         };
         // The merge query's cache misses start now and are over by the time it comes.
-        let grid_query = merge_source.map(|source| source.plan_and_prefetch(hit.position));
+        let grid_query = planned.or_else(|| merge_source.map(|source| source.plan_and_prefetch(hit.position)));
         // A thin dielectric's straight-through transmission is no vertex in media.
         let mut presampled = None;
         if media_active {
@@ -223,6 +235,8 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             grid_query,
         };
         let mut specular_only = false;
+        // The sub-path as it arrived here, for a merge done after the next ray.
+        let mut merge_later = None;
         if !bsdf.is_delta() {
             if techniques.connect {
                 // Next-event estimation (s = 1).
@@ -241,7 +255,21 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                     out.record(Family::Connection, light.record.path_length() + 1, t, value.to_rgb(w));
                 }
             }
-            if let Some(source) = merge_source {
+            // The merge after the next ray: the merge query's records, hinted above, have until
+            // then to arrive (its bucket starts were hinted at the hit). The result is that of
+            // merging now: a merge draws no random number unless the vertex is fluorescent,
+            // and it adds to its own family's sums (and images), whose order is unchanged. Not
+            // for fluorescent vertices, merges across wavelength groups (whose throughputs the
+            // scattering changes), photon mapping (which may end the path here) or media
+            // (whose walk draws numbers before the next surface).
+            let later = merge_source.is_some()
+                && end.fluorescent.is_none()
+                && group_throughputs.is_none()
+                && !techniques.ppm
+                && !media_active;
+            if later {
+                merge_later = Some(path);
+            } else if let Some(source) = merge_source {
                 let weighting = if techniques.ppm { MergeWeighting::None } else { MergeWeighting::Mis };
                 let merged = merge(
                     &path,
@@ -267,15 +295,32 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                 }
             }
         }
-        let Some(scattered) =
-            path.scatter(bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true, presampled)
-        else {
+        let scattered =
+            path.scatter(bsdf, hit.position, rng, specular_only, k, w, fluorescent.as_ref(), true, presampled);
+        if let Some(scattered) = scattered {
+            path.flight = Flight::start(side.towards(path.ray.direction), false, RAY_EPSILON);
+            // No fluorescence here: the step is what `SubPath::scatter` applied.
+            if let Some(throughputs) = &mut group_throughputs {
+                throughputs.push(scattered);
+            }
+        }
+        if let (Some(arrived), Some(source)) = (merge_later, merge_source) {
+            if scattered.is_some() {
+                // Trace the next ray (as the loop's start would: `merge_later` excludes media)
+                // and start its merge query's misses, then merge here.
+                if hint {
+                    LightSampler::Power.prefetch_next_event(scene, rng);
+                }
+                let next = scene.intersect(&path.ray);
+                let next_query = next.as_ref().map(|hit| source.plan_and_prefetch(hit.position));
+                traced = Some((next.map_or(Arrival::Escaped, Arrival::Surface), next_query));
+            }
+            let merged =
+                merge(&arrived, None, &end, source, radius, it.max_length, MergeWeighting::Mis, k, w, rng, out);
+            out.record(Family::Merging, 0, t, merged);
+        }
+        if scattered.is_none() {
             break;
-        };
-        path.flight = Flight::start(side.towards(path.ray.direction), false, RAY_EPSILON);
-        // No fluorescence here: the step is what `SubPath::scatter` applied.
-        if let Some(throughputs) = &mut group_throughputs {
-            throughputs.push(scattered);
         }
     }
 }
