@@ -6,7 +6,9 @@
 
 use math::{Frame, Rng, Vec3, sqr};
 use scene::material::fresnel_dielectric;
-use scene::microfacet::{Distribution, Microfacet, fresnel_conductor, fresnel_diffuse_reflectance};
+use scene::microfacet::{
+    Distribution, Microfacet, fresnel_conductor, fresnel_conductor_rgb, fresnel_diffuse_reflectance,
+};
 use scene::{Bsdf, LobeKind, Material, ShadingPoint, Texture, TransportMode};
 use spectrum::Rgb;
 use testkit::{Integration, MeanVar, assert_chi2, chi2_sphere, chi2_sphere_with, sidak};
@@ -516,6 +518,136 @@ fn conductor_fresnel_matches_known_values() {
     // eta = k = 0: a perfect mirror; grazing: total reflection.
     assert_eq!(fresnel_conductor(0.3, 0.0, 0.0), 1.0);
     assert!((fresnel_conductor(0.0, 0.27, 3.61) - 1.0).abs() < 1e-6);
+}
+
+/// The conductor Fresnel reflectance the textbook way, as `fresnel_conductor` computed it before
+/// it was reduced to one division: `Rs` and `Rp` each with its own division, their mean, in f64,
+/// with the same special cases (η = k = 0 a mirror, non-finite → 1, clamped to [0, 1]).
+fn fresnel_conductor_two_divisions(cos_incident: f32, eta: f32, k: f32) -> f64 {
+    if eta == 0.0 && k == 0.0 {
+        return 1.0;
+    }
+    let c = (cos_incident.abs() as f64).min(1.0);
+    let (eta, k) = (eta as f64, k as f64);
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let t0 = eta * eta - k * k - s2;
+    let a2b2 = (t0 * t0 + 4.0 * eta * eta * k * k).sqrt();
+    let a = (0.5 * (a2b2 + t0)).max(0.0).sqrt();
+    let rs = (a2b2 + c2 - 2.0 * a * c) / (a2b2 + c2 + 2.0 * a * c);
+    let t1 = a2b2 * c2 + s2 * s2;
+    let t2 = 2.0 * a * c * s2;
+    let rp = rs * (t1 - t2) / (t1 + t2);
+    let r = 0.5 * (rs + rp);
+    if r.is_finite() { r.clamp(0.0, 1.0) } else { 1.0 }
+}
+
+/// `fresnel_conductor` against [`fresnel_conductor_two_divisions`]: within a relative 1e-6 or
+/// an absolute 1e-7 (f32 rounding of the result is 6e-8 relative).
+fn assert_conductor_fresnel_matches_two_divisions(cos: f32, eta: f32, k: f32) {
+    let expected = fresnel_conductor_two_divisions(cos, eta, k);
+    let got = fresnel_conductor(cos, eta, k) as f64;
+    let error = (got - expected).abs();
+    assert!(
+        error <= 1e-7 || error <= 1e-6 * expected,
+        "cos {cos:e} η {eta} k {k}: {got:e} vs two divisions {expected:e} (error {error:e})"
+    );
+}
+
+/// The one-division form of the conductor reflectance agrees with the two-division textbook
+/// form on a dense grid: cos from 0 to 1 (both exactly, and grazing and near-normal values),
+/// η ∈ {0, 0.05, …, 5} and k ∈ {0, 0.05, …, 10}, so η = 0 with k > 0, k = 0 with η > 0 and η = 1,
+/// k = 0 at cos = 0 (a denominator of 0) are all on it.
+#[test]
+fn conductor_fresnel_one_division_matches_two_divisions_on_a_dense_grid() {
+    let mut cosines: Vec<f32> = (0..=500).map(|i| i as f32 / 500.0).collect();
+    cosines.extend([1e-7f32, 1e-6, 1e-5, 1e-4, 1e-3, 0.999, 0.9999, 0.99999, 1.0 - f32::EPSILON / 2.0]);
+    let mut points = 0;
+    for eta in (0..=100).map(|i| i as f32 / 20.0) {
+        for k in (0..=200).map(|j| j as f32 / 20.0) {
+            for &cos in &cosines {
+                assert_conductor_fresnel_matches_two_divisions(cos, eta, k);
+                points += 1;
+            }
+        }
+    }
+    assert_eq!(points, 101 * 201 * 510);
+}
+
+/// The special cases of the conductor reflectance are those of the two-division form: a
+/// denominator of 0 (η = 1, k = 0 at grazing incidence) and every non-finite value give 1, η = k
+/// = 0 is a mirror at every angle (also cos = 1, where t₁ = 0), the sign of the cosine does not
+/// matter, a cosine above 1 (or NaN) is normal incidence, and tiny or huge indices stay finite.
+#[test]
+fn conductor_fresnel_special_cases_match_two_divisions() {
+    assert_eq!(fresnel_conductor(0.0, 1.0, 0.0), 1.0);
+    assert_eq!(fresnel_conductor_two_divisions(0.0, 1.0, 0.0), 1.0);
+    for cos in [0.0f32, 0.3, 1.0, -0.5] {
+        for (eta, k) in [(0.0f32, 0.0f32), (-0.0, 0.0), (0.0, -0.0)] {
+            assert_eq!(fresnel_conductor(cos, eta, k), 1.0, "cos {cos} η {eta} k {k}");
+        }
+    }
+    let special = [
+        0.0f32,
+        -0.0,
+        1.0,
+        -1.0,
+        1e-45,
+        1e-30,
+        1e-10,
+        0.5,
+        3.0,
+        1e10,
+        1e30,
+        f32::MAX,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+    ];
+    let cosines = [0.0f32, -0.0, 1e-45, 1e-20, 0.2, -0.2, 0.7, 1.0, -1.0, 1.5, f32::INFINITY, f32::NAN];
+    for &cos in &cosines {
+        for &eta in &special {
+            for &k in &special {
+                assert_conductor_fresnel_matches_two_divisions(cos, eta, k);
+                let got = fresnel_conductor(cos, eta, k);
+                assert!((0.0..=1.0).contains(&got), "cos {cos} η {eta} k {k}: {got}");
+                if !(eta.is_finite() && k.is_finite()) {
+                    assert_eq!(got, 1.0, "cos {cos} η {eta} k {k}");
+                }
+            }
+        }
+    }
+}
+
+/// `fresnel_conductor_rgb` computes the three channels together; each equals the scalar
+/// function bit for bit, also when the channels mix ordinary, mirror and non-finite indices.
+#[test]
+fn conductor_fresnel_rgb_is_the_scalar_function_per_channel() {
+    let special = [0.0f32, 1.0, 1e-45, f32::MAX, f32::INFINITY, f32::NAN];
+    let mut rng = Rng::new(91, 7);
+    let pick = |rng: &mut Rng| {
+        if rng.uniform() < 0.1 {
+            special[(rng.next_u32() % special.len() as u32) as usize]
+        } else {
+            10.0 * rng.uniform()
+        }
+    };
+    for i in 0..200_000 {
+        let cos = match i % 50 {
+            0 => 0.0,
+            1 => 1.0,
+            _ => 2.0 * rng.uniform() - 1.0,
+        };
+        let eta = Rgb::new(pick(&mut rng), pick(&mut rng), pick(&mut rng));
+        let k = Rgb::new(pick(&mut rng), pick(&mut rng), pick(&mut rng));
+        let rgb = fresnel_conductor_rgb(cos, eta, k);
+        let scalar = [(eta.r, k.r), (eta.g, k.g), (eta.b, k.b)].map(|(e, k)| fresnel_conductor(cos, e, k));
+        assert_eq!(
+            [rgb.r, rgb.g, rgb.b].map(f32::to_bits),
+            scalar.map(f32::to_bits),
+            "cos {cos} η {eta:?} k {k:?}: {rgb:?} vs {scalar:?}"
+        );
+    }
 }
 
 #[test]
