@@ -167,32 +167,62 @@ pub fn refract(w: Vec3, m: Vec3, eta: f32) -> Option<Vec3> {
 /// to the normal (its absolute value is used). Exact for any complex index; `eta = k = 0` is a
 /// perfect mirror (reflectance 1). At normal incidence it is `((η−1)² + k²)/((η+1)² + k²)`.
 pub fn fresnel_conductor(cos_incident: f32, eta: f32, k: f32) -> f32 {
-    if eta == 0.0 && k == 0.0 {
-        return 1.0;
-    }
-    let c = (cos_incident.abs() as f64).min(1.0);
-    let (eta, k) = (eta as f64, k as f64);
-    let c2 = c * c;
-    let s2 = 1.0 - c2;
-    // With (a + i b)² = (η + i k)² − sin²θ:  a² + b² = |η² − k² − sin²θ + 2iηk|.
-    let t0 = eta * eta - k * k - s2;
-    let a2b2 = (t0 * t0 + 4.0 * eta * eta * k * k).sqrt();
-    let a = (0.5 * (a2b2 + t0)).max(0.0).sqrt();
-    let rs = (a2b2 + c2 - 2.0 * a * c) / (a2b2 + c2 + 2.0 * a * c);
-    let t1 = a2b2 * c2 + s2 * s2;
-    let t2 = 2.0 * a * c * s2;
-    let rp = rs * (t1 - t2) / (t1 + t2);
-    let r = 0.5 * (rs + rp);
-    if r.is_finite() { r.clamp(0.0, 1.0) as f32 } else { 1.0 }
+    let [r] = fresnel_conductor_lanes(cos_incident, [eta], [k]);
+    r
 }
 
-/// [`fresnel_conductor`] per colour channel.
+/// [`fresnel_conductor`] per colour channel, bit for bit. The three channels are computed
+/// together: the compiler packs red and green into SSE2 registers and computes blue beside them.
 pub fn fresnel_conductor_rgb(cos_incident: f32, eta: Rgb, k: Rgb) -> Rgb {
-    Rgb::new(
-        fresnel_conductor(cos_incident, eta.r, k.r),
-        fresnel_conductor(cos_incident, eta.g, k.g),
-        fresnel_conductor(cos_incident, eta.b, k.b),
-    )
+    let [r, g, b] = fresnel_conductor_lanes(cos_incident, [eta.r, eta.g, eta.b], [k.r, k.g, k.b]);
+    Rgb::new(r, g, b)
+}
+
+/// The conductor Fresnel reflectance of [`fresnel_conductor`] for `N` complex indices at one
+/// angle, in f64, every lane by the same operations (so one lane of a wider call equals the
+/// scalar call bit for bit).
+///
+/// With `(a + i b)² = (η + i k)² − sin²θ`, `A = a² + b² + cos²θ` and `B = 2 a cosθ`, the s- and
+/// p-polarised reflectances are `Rs = (A − B)/(A + B)` and `Rp = Rs·(t₁ − t₂)/(t₁ + t₂)` with
+/// `t₁ = (a² + b²) cos²θ + sin⁴θ` and `t₂ = B sin²θ`. Their mean is
+/// `Rs/2 · (1 + (t₁ − t₂)/(t₁ + t₂)) = Rs·t₁/(t₁ + t₂) = (A − B)·t₁ / ((A + B)·(t₁ + t₂))`:
+/// one division instead of two. Both factors of the denominator are sums of non-negative terms;
+/// it is 0 only at `cosθ = 0` with `η = ±1, k = 0` (and for `η = k = 0`, returned as 1 anyway),
+/// where the numerator is 0 too: NaN, as with two divisions, and NaN becomes 1.
+///
+/// Written as straight-line steps over the lanes, without branches, so that LLVM's SLP
+/// vectoriser packs the lanes into SSE2 registers (`sqrtpd`, `divpd`). Keep the last step as it
+/// is: with `if mirror || !r.is_finite() { 1 } else { clamped }` or an `if mirror { 1 } else if
+/// …` chain instead, the whole function went back to scalar code (docs/performance.md).
+#[inline(always)]
+fn fresnel_conductor_lanes<const N: usize>(cos_incident: f32, eta: [f32; N], k: [f32; N]) -> [f32; N] {
+    let c = (cos_incident.abs() as f64).min(1.0);
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let s4 = s2 * s2;
+    let eta = eta.map(f64::from);
+    let k = k.map(f64::from);
+    let mut r = [0.0f64; N];
+    for i in 0..N {
+        let (eta2, k2) = (eta[i] * eta[i], k[i] * k[i]);
+        // a² + b² = |η² − k² − sin²θ + 2iηk|.
+        let t0 = eta2 - k2 - s2;
+        let a2b2 = (t0 * t0 + 4.0 * eta2 * k2).sqrt();
+        let a = (0.5 * (a2b2 + t0)).max(0.0).sqrt();
+        let big_a = a2b2 + c2;
+        let big_b = 2.0 * a * c;
+        let t1 = a2b2 * c2 + s4;
+        r[i] = ((big_a - big_b) * t1) / ((big_a + big_b) * (t1 + big_b * s2));
+    }
+    std::array::from_fn(|i| {
+        // η = k = 0 (the squares of f32 values cannot underflow in f64) is a perfect mirror.
+        // The formula gives it too (a = B = 0, so the numerator equals the denominator: 1 or
+        // 0/0), but the special case stays explicit.
+        let mirror = eta[i] * eta[i] + k[i] * k[i] == 0.0;
+        // NaN and −∞ fail `r ≥ −MAX` and become 1, as the mirror does; +∞ is clamped to 1.
+        let r = if !mirror && r[i] >= -f64::MAX { r[i] } else { 1.0 };
+        r.clamp(0.0, 1.0) as f32
+    })
 }
 
 /// Hemispherical average `2∫₀¹ F(μ) μ dμ` of the unpolarised Fresnel reflectance of a smooth
