@@ -282,6 +282,43 @@ fn black_materials_do_not_scatter() {
     assert!(reference_bsdf(&white, Vec3::Z, Vec3::X, TransportMode::Radiance).is_none(), "grazing fixed direction");
 }
 
+/// `ReferenceMaterial::is_specular_only` (the VCM camera pass plans no merge query on such
+/// hits) holds exactly when every BSDF built from the material, at any angle and in either
+/// mode, is delta or absent: mirror, glass, black and a mirror-glass mix are; any diffuse or
+/// Phong reflectance, however small, is not.
+#[test]
+fn specular_only_materials_build_only_delta_bsdfs() {
+    let glass = ReferenceMaterial { mirror: Rgb::splat(1.0), ior: 1.6, ..ReferenceMaterial::BLACK };
+    let specular = [
+        ("black", ReferenceMaterial::BLACK),
+        ("mirror", ReferenceMaterial { mirror: Rgb::new(0.9, 0.5, 0.2), ..ReferenceMaterial::BLACK }),
+        ("glass", glass),
+        ("glass without mirror", ReferenceMaterial { mirror: Rgb::BLACK, ..glass }),
+    ];
+    let tiny = Rgb::new(0.0, 0.0, 1e-6);
+    let not_specular = [
+        ("faint diffuse", ReferenceMaterial { diffuse: tiny, ..glass }),
+        ("faint Phong", ReferenceMaterial { phong: tiny, phong_exponent: 20.0, ..glass }),
+        ("white diffuse", ReferenceMaterial::diffuse(Rgb::splat(0.8))),
+    ];
+    let n = normal();
+    for (name, material, expected) in
+        specular.iter().map(|&(n, m)| (n, m, true)).chain(not_specular.iter().map(|&(n, m)| (n, m, false)))
+    {
+        assert_eq!(material.is_specular_only(), expected, "{name}");
+        let mut any_non_delta = false;
+        for theta in [0.5, 30.0, 60.0, 85.0, 95.0, 150.0] {
+            for mode in MODES {
+                let fixed = direction_at(n, theta, 0.7);
+                if let Some(bsdf) = reference_bsdf(&material, n, fixed, mode) {
+                    any_non_delta |= !bsdf.is_delta();
+                }
+            }
+        }
+        assert_eq!(any_non_delta, !expected, "{name}: some BSDF is not delta");
+    }
+}
+
 /// The BSDF of a reference material with the shading normal equal to the geometric one.
 fn reference_bsdf(material: &ReferenceMaterial, normal: Vec3, fixed: Vec3, mode: TransportMode) -> Option<Bsdf> {
     Bsdf::new(&Material::from(*material), &ShadingPoint::flat(normal), fixed, mode)

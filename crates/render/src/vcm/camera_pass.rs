@@ -7,7 +7,7 @@
 
 use math::{RAY_EPSILON, Rng, Vec3};
 use scene::camera::PrimaryDensity;
-use scene::{Bsdf, Scene, TransportMode};
+use scene::{Bsdf, Material, Scene, SurfaceHit, TransportMode};
 use spectrum::SpectralMode;
 
 use super::connect::{CameraEnd, LightBsdfs, connect_vertices, next_event};
@@ -128,13 +128,20 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     // map's sample can be prefetched while the ray to the vertex is traced (not in media, where
     // the flight draws before it).
     let hint = techniques.connect && !media_active && scene.has_prefetchable_background();
+    // Plans a hit's merge query and starts its first cache misses, unless no merge can happen
+    // there (a purely specular reference material: its BSDF is delta or absent).
+    let plan_at = |hit: &SurfaceHit| {
+        let source = merge_source?;
+        let specular = matches!(scene.material(hit), Material::Reference(m) if m.is_specular_only());
+        (!specular).then(|| source.plan_and_prefetch(hit.position))
+    };
     // The next ray's arrival and merge query when the last vertex traced it before its merge
     // (see "The merge after the next ray" below).
     let mut traced: Option<(Arrival, Option<GridQuery>)> = None;
 
     loop {
         let (arrival, planned) = match traced.take() {
-            Some(next) => next,
+            Some((arrival, planned)) => (arrival, Some(planned)),
             None => {
                 if hint {
                     LightSampler::Power.prefetch_next_event(scene, rng);
@@ -180,7 +187,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             break;
         };
         // The merge query's cache misses start now and are over by the time it comes.
-        let grid_query = planned.or_else(|| merge_source.map(|source| source.plan_and_prefetch(hit.position)));
+        let grid_query = planned.unwrap_or_else(|| plan_at(&hit));
         // A thin dielectric's straight-through transmission is no vertex in media.
         let mut presampled = None;
         if media_active {
@@ -312,7 +319,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                     LightSampler::Power.prefetch_next_event(scene, rng);
                 }
                 let next = scene.intersect(&path.ray);
-                let next_query = next.as_ref().map(|hit| source.plan_and_prefetch(hit.position));
+                let next_query = next.as_ref().and_then(plan_at);
                 traced = Some((next.map_or(Arrival::Escaped, Arrival::Surface), next_query));
             }
             let merged =

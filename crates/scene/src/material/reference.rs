@@ -47,6 +47,14 @@ impl ReferenceMaterial {
     pub const fn diffuse(rho: Rgb) -> Self {
         ReferenceMaterial { diffuse: rho, ..Self::BLACK }
     }
+
+    /// True when neither the diffuse nor the Phong lobe reflects anything, so that a BSDF built
+    /// from this material is purely specular ([`crate::Bsdf::is_delta`]) or absorbs everything
+    /// (no BSDF) at every point and for every direction: no vertex on it is connected to or
+    /// merged at.
+    pub fn is_specular_only(&self) -> bool {
+        self.diffuse.luminance() == 0.0 && self.phong.luminance() == 0.0
+    }
 }
 
 /// Lobe selection probabilities, proportional to each lobe's albedo (luminance).
