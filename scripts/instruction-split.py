@@ -150,10 +150,6 @@ def split(blocks, total, table, shadow, ours):
                 caller = name.split("(")[0]
                 cost -= inclusive(blocks, shadow, caller, exact=ours)
         out[category] = cost
-    if not ours:
-        # SmallVCM's connections are inlined into RunIteration: their shadow rays are the
-        # iteration's own calls of Scene::Occluded.
-        out["connections shadow rays"] = inclusive(blocks, shadow, "VertexCM::RunIteration", exact=False)
     out["total"] = total
     return out
 

@@ -306,6 +306,7 @@ fn specular_only_materials_build_only_delta_bsdfs() {
         specular.iter().map(|&(n, m)| (n, m, true)).chain(not_specular.iter().map(|&(n, m)| (n, m, false)))
     {
         assert_eq!(material.is_specular_only(), expected, "{name}");
+        assert_eq!(Material::from(material).is_specular_only(), expected, "{name} as a Material");
         let mut any_non_delta = false;
         for theta in [0.5, 30.0, 60.0, 85.0, 95.0, 150.0] {
             for mode in MODES {

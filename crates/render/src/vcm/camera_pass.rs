@@ -5,9 +5,9 @@
 //! so that the light vertices they read have arrived in the cache (same results: see "The merge
 //! after the next ray" in the loop).
 
-use math::{RAY_EPSILON, Rng, Vec3};
+use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::camera::PrimaryDensity;
-use scene::{Bsdf, Material, Scene, SurfaceHit, TransportMode};
+use scene::{Bsdf, Scene, SurfaceHit, TransportMode};
 use spectrum::SpectralMode;
 
 use super::connect::{CameraEnd, LightBsdfs, connect_vertices, next_event};
@@ -129,11 +129,18 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     // the flight draws before it).
     let hint = techniques.connect && !media_active && scene.has_prefetchable_background();
     // Plans a hit's merge query and starts its first cache misses, unless no merge can happen
-    // there (a purely specular reference material: its BSDF is delta or absent).
+    // there (a purely specular material: its BSDF is delta or absent).
     let plan_at = |hit: &SurfaceHit| {
         let source = merge_source?;
-        let specular = matches!(scene.material(hit), Material::Reference(m) if m.is_specular_only());
-        (!specular).then(|| source.plan_and_prefetch(hit.position))
+        (!scene.material(hit).is_specular_only()).then(|| source.plan_and_prefetch(hit.position))
+    };
+    // The next surface the path's ray meets, outside media, with the environment map's
+    // next-event sample hinted first (see `hint`).
+    let next_surface = |ray: &Ray, rng: &mut Rng| {
+        if hint {
+            LightSampler::Power.prefetch_next_event(scene, rng);
+        }
+        scene.intersect(ray)
     };
     // The next ray's arrival and merge query when the last vertex traced it before its merge
     // (see "The merge after the next ray" below).
@@ -143,14 +150,12 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         let (arrival, planned) = match traced.take() {
             Some((arrival, planned)) => (arrival, Some(planned)),
             None => {
-                if hint {
-                    LightSampler::Power.prefetch_next_event(scene, rng);
-                }
                 let arrival = if media_active {
+                    // (`hint` is off in media.)
                     let p = &mut path;
                     advance(scene, &mut p.ray, &mut p.origin_offset, &mut p.flight, &mut p.throughput, rng, w)
                 } else {
-                    scene.intersect(&path.ray).map_or(Arrival::Escaped, Arrival::Surface)
+                    next_surface(&path.ray, rng).map_or(Arrival::Escaped, Arrival::Surface)
                 };
                 (arrival, None)
             }
@@ -315,10 +320,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
             if scattered.is_some() {
                 // Trace the next ray (as the loop's start would: `merge_later` excludes media)
                 // and start its merge query's misses, then merge here.
-                if hint {
-                    LightSampler::Power.prefetch_next_event(scene, rng);
-                }
-                let next = scene.intersect(&path.ray);
+                let next = next_surface(&path.ray, rng);
                 let next_query = next.as_ref().and_then(plan_at);
                 traced = Some((next.map_or(Arrival::Escaped, Arrival::Surface), next_query));
             }

@@ -217,6 +217,14 @@ impl Material {
     pub fn perfect_mirror() -> Self {
         Material::Conductor { eta: Rgb::BLACK, k: Rgb::BLACK, specular_reflectance: Texture::Constant(Rgb::WHITE) }
     }
+
+    /// True when every BSDF built from this material, at every point and for every direction,
+    /// is purely specular ([`crate::Bsdf::is_delta`]) or absent, so that no vertex on it is
+    /// connected to or merged at. Conservative: only SmallVCM's material is recognised so far
+    /// ([`super::ReferenceMaterial::is_specular_only`]); every other model answers false.
+    pub fn is_specular_only(&self) -> bool {
+        matches!(self, Material::Reference(m) if m.is_specular_only())
+    }
 }
 
 impl Material {
