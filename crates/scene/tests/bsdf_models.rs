@@ -859,3 +859,69 @@ fn inconsistent_or_one_sided_configurations_do_not_scatter() {
     let black = Material::Diffuse { reflectance: constant(0.0, 0.0, 0.0) };
     assert!(Bsdf::new(&black, &point, ng, TransportMode::Radiance).is_none());
 }
+
+/// `Material::is_specular_only` (the VCM camera pass plans no merge query on such hits) answers
+/// true for the smooth models and what wraps only them, and then every BSDF built from the
+/// material, at a flat and a tilted point, from both sides, in both modes, is delta or absent;
+/// the rough and diffuse models, and any wrapper holding one, answer false and build a
+/// non-delta BSDF somewhere.
+#[test]
+fn smooth_models_and_their_wrappers_are_specular_only() {
+    let conductor = Material::Conductor { eta: CU_ETA, k: CU_K, specular_reflectance: constant(0.9, 0.8, 1.0) };
+    let thin = Material::ThinDielectric {
+        int_ior: 1.5,
+        ext_ior: 1.0,
+        specular_reflectance: white(),
+        specular_transmittance: constant(0.9, 0.9, 0.7),
+    };
+    let mapped = |nested: Material| Material::NormalMap {
+        normals: constant(0.6, 0.45, 0.9),
+        nested: Box::new(nested),
+        options: scene::material::MapOptions::MITSUBA,
+    };
+    let two_sided = |front: Material, back: Option<Material>| Material::TwoSided {
+        front: Box::new(front),
+        back: back.map(Box::new),
+    };
+    let specular = [
+        ("conductor", conductor.clone()),
+        ("perfect mirror", Material::perfect_mirror()),
+        ("dielectric", dielectric(1.5, 1.0)),
+        ("thin dielectric", thin.clone()),
+        ("blend of conductor and dielectric", blend(0.4, conductor.clone(), dielectric(1.3, 1.0))),
+        ("two-sided conductor", two_sided(conductor.clone(), None)),
+        ("two-sided conductor / mirror", two_sided(conductor.clone(), Some(Material::perfect_mirror()))),
+        ("normal-mapped dielectric", mapped(dielectric(1.5, 1.0))),
+        ("normal-mapped thin dielectric", mapped(thin)),
+    ];
+    let not_specular = [
+        ("diffuse", diffuse()),
+        ("rough conductor", rough_conductor(0.05, 0.05)),
+        ("rough dielectric", rough_dielectric(0.05, 0.05, 1.5, 1.0)),
+        ("plastic", plastic(1.5, false)),
+        ("blend of conductor and diffuse", blend(0.999, conductor.clone(), diffuse())),
+        ("two-sided conductor / diffuse", two_sided(conductor.clone(), Some(diffuse()))),
+        ("normal-mapped rough conductor", mapped(rough_conductor(0.3, 0.3))),
+    ];
+    let flat = flat_point();
+    let points = [flat, tilted_point()];
+    for (name, material, expected) in
+        specular.iter().map(|(n, m)| (n, m, true)).chain(not_specular.iter().map(|(n, m)| (n, m, false)))
+    {
+        assert_eq!(material.is_specular_only(), expected, "{name}");
+        let mut any_non_delta = false;
+        for point in &points {
+            for theta in [0.5, 20.0, 45.0, 70.0, 88.0, 92.0, 120.0, 160.0] {
+                for azimuth in [0.3, 2.5, 4.4] {
+                    let fixed = direction_at(point.geometric_normal, theta, azimuth);
+                    for mode in MODES {
+                        if let Some(bsdf) = Bsdf::new(material, point, fixed, mode) {
+                            any_non_delta |= !bsdf.is_delta();
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(any_non_delta, !expected, "{name}: some BSDF is not delta");
+    }
+}

@@ -220,10 +220,23 @@ impl Material {
 
     /// True when every BSDF built from this material, at every point and for every direction,
     /// is purely specular ([`crate::Bsdf::is_delta`]) or absent, so that no vertex on it is
-    /// connected to or merged at. Conservative: only SmallVCM's material is recognised so far
-    /// ([`super::ReferenceMaterial::is_specular_only`]); every other model answers false.
+    /// connected to or merged at: SmallVCM's material without diffuse or Phong reflectance
+    /// ([`super::ReferenceMaterial::is_specular_only`]), the smooth conductor, dielectric and
+    /// thin dielectric, and blends, two-sided wrappers and normal or bump maps of those only
+    /// (a perturbed shading normal turns a delta lobe, it does not widen it). Conservative:
+    /// every other model answers false, also where a parameter would make it specular (a
+    /// rough model at zero roughness, a blend weight of 0 or 1).
     pub fn is_specular_only(&self) -> bool {
-        matches!(self, Material::Reference(m) if m.is_specular_only())
+        match self {
+            Material::Reference(m) => m.is_specular_only(),
+            Material::Conductor { .. } | Material::Dielectric { .. } | Material::ThinDielectric { .. } => true,
+            Material::Blend { first, second, .. } => first.is_specular_only() && second.is_specular_only(),
+            Material::TwoSided { front, back } => {
+                front.is_specular_only() && back.as_ref().is_none_or(|b| b.is_specular_only())
+            }
+            Material::NormalMap { nested, .. } | Material::BumpMap { nested, .. } => nested.is_specular_only(),
+            _ => false,
+        }
     }
 }
 
