@@ -75,7 +75,9 @@ pub struct SurfaceHit {
     pub normal: Vec3,
     /// Unit shading normal (interpolated vertex normals; the geometric normal otherwise).
     pub shading_normal: Vec3,
-    /// Texture coordinates.
+    /// Texture coordinates: a mesh's interpolated uvs ((0, 0) on a mesh without them); on a
+    /// sphere or a disc its parameterisation when the material reads them
+    /// ([`Scene::material_reads_uv`]), else (0, 0).
     pub uv: Vec2,
     /// ∂p/∂u (world space, not normalised) when the material is anisotropic
     /// ([`Material::is_anisotropic`]), else zero (see [`ShadingPoint::tangent`]).
@@ -147,6 +149,8 @@ pub struct Scene {
     reads_mesh_attribute: Vec<bool>,
     /// Per material: [`Material::is_anisotropic`] (hits then carry ∂p/∂u).
     anisotropic: Vec<bool>,
+    /// Per material: [`Scene::material_reads_uv`].
+    reads_uv: Vec<bool>,
     /// Per material: [`Material::is_fibre`] (hits on the back side are skipped, see
     /// [`Scene::alpha_keeps`]).
     pub(crate) fibres: Vec<bool>,
@@ -215,6 +219,7 @@ impl Scene {
         let light_selection = light_selection(&lights, &bounding_sphere, &own_groups).unwrap_or(None);
         let reads_mesh_attribute = materials.iter().map(|m| matches!(m.mesh_attribute(), Ok(Some(_)))).collect();
         let anisotropic = materials.iter().map(Material::is_anisotropic).collect();
+        let reads_uv = materials.iter().map(|m| m.reads_uv() || m.perturbs_shading_normal()).collect();
         Self {
             name: name.into(),
             primitives,
@@ -233,6 +238,7 @@ impl Scene {
             light_tree: std::sync::OnceLock::new(),
             reads_mesh_attribute,
             anisotropic,
+            reads_uv,
             fibres,
             bvh,
             #[cfg(feature = "embree")]
@@ -262,6 +268,15 @@ impl Scene {
     #[inline]
     pub fn material_is_anisotropic(&self, index: u32) -> bool {
         self.anisotropic.get(index as usize).copied().unwrap_or(false)
+    }
+
+    /// Whether a hit on material `index` needs its texture coordinates: a texture of its BSDF
+    /// varies with them ([`Material::reads_uv`]), or it is a normal or bump map. Hits on spheres
+    /// and discs compute their parameterisation (an `atan2`, and on spheres an `acos`) only
+    /// then.
+    #[inline]
+    pub fn material_reads_uv(&self, index: u32) -> bool {
+        self.reads_uv.get(index as usize).copied().unwrap_or(true)
     }
 
     /// Sets the surface attributes that primitives refer to.
@@ -400,13 +415,19 @@ impl Scene {
             // costs measurable time, and no texture can be placed on it meaningfully anyway.
             (Shape::Triangle(_), _) => {}
             (Shape::Sphere(s), attributes) => {
-                uv = s.uv_at(position);
+                if self.material_reads_uv(primitive.material) {
+                    uv = s.uv_at(position);
+                }
                 if matches!(attributes, Some(SurfaceAttributes::FlippedNormal)) {
                     normal = -normal;
                     shading_normal = normal;
                 }
             }
-            (Shape::Disk(d), _) => uv = d.uv_at(position),
+            (Shape::Disk(d), _) => {
+                if self.material_reads_uv(primitive.material) {
+                    uv = d.uv_at(position);
+                }
+            }
         }
         // Normal and bump maps replace the shading normal (in the primitive's own space, where
         // its tangents are).

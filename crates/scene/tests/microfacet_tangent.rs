@@ -91,3 +91,45 @@ fn hits_on_anisotropic_materials_carry_dp_du() {
     let h = hit(&scene, Vec3::new(0.3, 0.4, 1.0), -Vec3::Z);
     assert!(h.tangent.normalize().dot(Vec3::new(0.6, 0.8, 0.0)) > 0.9999, "{:?}", h.tangent);
 }
+
+/// Hits on spheres and discs carry their uv parameterisation when the material reads uvs (a
+/// checkerboard, or a normal map over a constant), and (0, 0) when it does not
+/// (`Scene::material_reads_uv`: the parameterisation is then not computed).
+#[test]
+fn sphere_and_disc_hits_carry_uv_only_for_materials_that_read_it() {
+    let checker = Material::Diffuse {
+        reflectance: Texture::Checkerboard {
+            color0: Rgb::WHITE,
+            color1: Rgb::BLACK,
+            to_uv: scene::desc::UvTransform::IDENTITY,
+        },
+    };
+    let plain = Material::Diffuse { reflectance: Texture::Constant(Rgb::WHITE) };
+    let mapped = Material::NormalMap {
+        normals: Texture::Constant(Rgb::new(0.5, 0.5, 1.0)),
+        nested: Box::new(plain.clone()),
+        options: scene::material::MapOptions::MITSUBA,
+    };
+    let materials = vec![checker, plain, mapped];
+    let sphere = Sphere { center: Vec3::ZERO, radius: 1.0 };
+    let disk = Disk::new(Vec3::ZERO, Vec3::X, Vec3::Y, false).unwrap();
+    // A sphere hit at φ = 90°, z = 0.6 (u = 1/4, v = acos(0.6)/π); a disc hit at radius 0.5,
+    // angle 0 (u = 0.5, v = 0).
+    let sphere_origin = Vec3::new(0.0, 3.0, 0.6);
+    let sphere_uv = Vec2::new(0.25, 0.6f32.acos() / std::f32::consts::PI);
+    let disk_origin = Vec3::new(0.5, 0.0, 1.0);
+    for (material, reads) in [(0, true), (1, false), (2, true)] {
+        let scene = |shape| {
+            Scene::new("u", vec![Primitive::new(shape, material, None)], materials.clone(), Vec::new(), camera())
+        };
+        assert_eq!(scene(Shape::Sphere(sphere)).material_reads_uv(material), reads);
+        let on_sphere = hit(&scene(Shape::Sphere(sphere)), sphere_origin, -Vec3::Y).uv;
+        let on_disk = hit(&scene(Shape::Disk(disk)), disk_origin, -Vec3::Z).uv;
+        if reads {
+            assert!((on_sphere - sphere_uv).length() < 1e-5, "material {material}: sphere uv {on_sphere}");
+            assert!((on_disk - Vec2::new(0.5, 0.0)).length() < 1e-5, "material {material}: disc uv {on_disk}");
+        } else {
+            assert_eq!((on_sphere, on_disk), (Vec2::ZERO, Vec2::ZERO), "material {material}");
+        }
+    }
+}
