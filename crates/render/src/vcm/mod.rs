@@ -885,23 +885,23 @@ fn build_grid<V: AsRef<MergeRecord<S>> + Sync, S: SpectralMode>(
 pub(crate) const LIGHT_BATCH: usize = 16 * LIGHT_CHUNK;
 
 /// Traces the `pixel_count` light sub-paths of `iteration` in batches of parallel chunks and
-/// hands each chunk to `take`, in path order (deterministic for any thread count); a batch is
-/// handed over before the next one is traced. The chunks' buffers are reused from batch to
-/// batch (`take` may empty them; they are cleared before the next batch), so after the first
-/// batch tracing neither allocates nor grows them.
+/// hands each batch's chunks to `take`, in path order (deterministic for any thread count); a
+/// batch is handed over before the next one is traced. The chunks' buffers are reused from
+/// batch to batch (`take` may empty them; they are cleared before the next batch), so after the
+/// first batch tracing neither allocates nor grows them.
 fn trace_in_batches<S: SpectralMode>(
     scene: &Scene,
     (seed, iteration): (u64, u64),
     it: &Iteration,
     pixel_count: usize,
     sets: &WavelengthSource<S>,
-    mut take: impl FnMut(&mut LightChunk<S>),
+    mut take: impl FnMut(&mut [LightChunk<S>]),
 ) {
     let mut chunks = Vec::new();
     for batch in (0..pixel_count).step_by(LIGHT_BATCH) {
         let paths = batch..(batch + LIGHT_BATCH).min(pixel_count);
         trace_light_chunks(scene, seed, iteration, it, paths, sets, &mut chunks);
-        chunks.iter_mut().for_each(&mut take);
+        take(&mut chunks);
     }
 }
 
@@ -916,11 +916,21 @@ fn trace_light_pass<S: SpectralMode>(
     store: &mut LightVertexStore<S>,
     splats: &mut SplatSums,
 ) {
-    trace_in_batches(scene, (seed, iteration), it, pixel_count, sets, |(vertices, ends, chunk_splats)| {
-        let base = store.vertices.len() as u32;
-        store.vertices.extend_from_slice(vertices);
-        store.path_ends.extend(ends.iter().map(|e| e + base));
-        splats.add(&scene.camera, chunk_splats);
+    trace_in_batches(scene, (seed, iteration), it, pixel_count, sets, |chunks| {
+        // Between two batches the other threads would wait: the copy into the store and the
+        // splat sums touch different memory, so they run side by side (each in path order).
+        let (stored, chunk_splats): (Vec<_>, Vec<_>) =
+            chunks.iter_mut().map(|(vertices, ends, splats)| ((&*vertices, &*ends), splats)).unzip();
+        rayon::join(
+            || {
+                for (vertices, ends) in stored {
+                    let base = store.vertices.len() as u32;
+                    store.vertices.extend_from_slice(vertices);
+                    store.path_ends.extend(ends.iter().map(|e| e + base));
+                }
+            },
+            || chunk_splats.into_iter().for_each(|s| splats.add(&scene.camera, s)),
+        );
     });
 }
 
@@ -937,10 +947,12 @@ fn trace_merge_records<S: SpectralMode>(
 ) -> Vec<u32> {
     records.clear();
     let mut path_ends = Vec::with_capacity(pixel_count);
-    trace_in_batches(scene, (seed, iteration), it, pixel_count, sets, |(vertices, ends, _)| {
-        let base = records.len() as u32;
-        records.extend(vertices.iter().map(|v| v.record));
-        path_ends.extend(ends.iter().map(|e| e + base));
+    trace_in_batches(scene, (seed, iteration), it, pixel_count, sets, |chunks| {
+        for (vertices, ends, _) in chunks {
+            let base = records.len() as u32;
+            records.extend(vertices.iter().map(|v| v.record));
+            path_ends.extend(ends.iter().map(|e| e + base));
+        }
     });
     path_ends
 }
