@@ -116,7 +116,9 @@ pub struct Scene {
     pub name: String,
     /// Geometry, in scene order (the order only matters for exact ties).
     pub primitives: Vec<Primitive>,
-    /// Materials referenced by the primitives.
+    /// Materials referenced by the primitives. Not to be changed after construction: the
+    /// scene's per-material tables (mesh attributes, anisotropy, uv use, purely specular) are
+    /// made from them then.
     pub materials: Vec<Material>,
     /// Lights, in selection order.
     pub lights: Vec<Light>,
@@ -151,6 +153,8 @@ pub struct Scene {
     anisotropic: Vec<bool>,
     /// Per material: [`Scene::material_reads_uv`].
     reads_uv: Vec<bool>,
+    /// Per material: [`Material::is_specular_only`].
+    specular_only: Vec<bool>,
     /// Per material: [`Material::is_fibre`] (hits on the back side are skipped, see
     /// [`Scene::alpha_keeps`]).
     pub(crate) fibres: Vec<bool>,
@@ -220,6 +224,7 @@ impl Scene {
         let reads_mesh_attribute = materials.iter().map(|m| matches!(m.mesh_attribute(), Ok(Some(_)))).collect();
         let anisotropic = materials.iter().map(Material::is_anisotropic).collect();
         let reads_uv = materials.iter().map(|m| m.reads_uv() || m.perturbs_shading_normal()).collect();
+        let specular_only = materials.iter().map(Material::is_specular_only).collect();
         Self {
             name: name.into(),
             primitives,
@@ -239,6 +244,7 @@ impl Scene {
             reads_mesh_attribute,
             anisotropic,
             reads_uv,
+            specular_only,
             fibres,
             bvh,
             #[cfg(feature = "embree")]
@@ -277,6 +283,13 @@ impl Scene {
     #[inline]
     pub fn material_reads_uv(&self, index: u32) -> bool {
         self.reads_uv.get(index as usize).copied().unwrap_or(true)
+    }
+
+    /// [`Material::is_specular_only`] of material `index` (false for an unknown index), from a
+    /// table made with the scene: every BSDF built on it is delta or absent.
+    #[inline]
+    pub fn material_is_specular_only(&self, index: u32) -> bool {
+        self.specular_only.get(index as usize).copied().unwrap_or(false)
     }
 
     /// Sets the surface attributes that primitives refer to.

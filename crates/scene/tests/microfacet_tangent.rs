@@ -133,3 +133,30 @@ fn sphere_and_disc_hits_carry_uv_only_for_materials_that_read_it() {
         }
     }
 }
+
+/// The scene's per-material table of purely specular materials (the VCM camera pass reads it
+/// at every hit) answers as `Material::is_specular_only` for each material, and false beyond.
+#[test]
+fn the_specular_only_table_follows_the_materials() {
+    let glass = Material::Dielectric {
+        int_ior: 1.5,
+        ext_ior: 1.0,
+        specular_reflectance: Texture::Constant(Rgb::WHITE),
+        specular_transmittance: Texture::Constant(Rgb::WHITE),
+        dispersion: None,
+    };
+    let materials = vec![
+        Material::Diffuse { reflectance: Texture::Constant(Rgb::WHITE) },
+        Material::perfect_mirror(),
+        glass,
+        conductor(Distribution::Ggx, 0.2, 0.2),
+    ];
+    let sphere = Sphere { center: Vec3::ZERO, radius: 1.0 };
+    let scene = Scene::new("m", vec![Primitive::new(Shape::Sphere(sphere), 0, None)], materials, Vec::new(), camera());
+    let expected = [false, true, true, false];
+    for (index, material) in scene.materials.iter().enumerate() {
+        assert_eq!(material.is_specular_only(), expected[index], "material {index}");
+        assert_eq!(scene.material_is_specular_only(index as u32), expected[index], "table entry {index}");
+    }
+    assert!(!scene.material_is_specular_only(4));
+}
