@@ -65,6 +65,11 @@ impl Distribution1D {
     /// The index is the first whose cumulative weight exceeds `u · total` (the last one if
     /// none does).
     pub fn sample(&self, u: f32) -> (usize, f32) {
+        // One entry (a scene with one light): the search below would find it, with probability
+        // `cdf[0] / total` = 1 exactly (`total` is the last cumulative weight).
+        if self.cdf.len() == 1 {
+            return (0, 1.0);
+        }
         let target = u * self.total;
         let index = self.guide.partition_point(&self.cdf, target).min(self.cdf.len() - 1);
         (index, self.probability(index))
@@ -258,8 +263,18 @@ mod tests {
     fn guided_sampling_picks_the_bin_of_a_full_search() {
         let mut rng = crate::Rng::new(1, 2);
         let random: Vec<f32> = (0..777).map(|i| if i % 5 < 2 { 0.0 } else { rng.uniform() * 10.0 }).collect();
-        let tables: [&[f32]; 6] =
-            [&[1.0], &[0.0, 0.0, 5.0], &[5.0, 0.0, 0.0], &[1.0, 0.0, 0.0, 0.0, 2.0], &[1e-30, 1e30, 1e-30], &random];
+        // One entry with any weight: `sample`'s shortcut must give the searched bin's probability.
+        let tables: [&[f32]; 9] = [
+            &[1.0],
+            &[0.3],
+            &[7e-20],
+            &[3.0e38],
+            &[0.0, 0.0, 5.0],
+            &[5.0, 0.0, 0.0],
+            &[1.0, 0.0, 0.0, 0.0, 2.0],
+            &[1e-30, 1e30, 1e-30],
+            &random,
+        ];
         for weights in tables {
             let d = Distribution1D::new(weights).unwrap();
             let mut us = vec![0.0, ONE_MINUS_EPSILON, 1.0, -0.0];
