@@ -232,7 +232,7 @@ impl<'a> Renderer<'a> {
         }
         if settings.vcm_settings().is_some()
             && let Some(index) = (0..scene.materials.len())
-                .find(|&i| scene.material_reads_mesh_attribute(i as u32) && scene.materials[i].reads_uv())
+                .find(|&i| scene.material_flags(i as u32).reads_mesh_attribute && scene.materials[i].reads_uv())
         {
             return Err(format!(
                 "material {index} reads both a mesh attribute and a uv texture; the VCM engine's light vertices \

@@ -92,7 +92,7 @@ impl Scene {
     /// on the back side of a hair fibre's surface ([`crate::Material::is_fibre`]) never does.
     #[inline]
     pub(crate) fn alpha_keeps(&self, primitive: &Primitive, ray: &Ray, t: f32) -> bool {
-        if self.fibres.get(primitive.material as usize).copied().unwrap_or(false)
+        if self.material_flags(primitive.material).fibre
             && ray.direction.dot(primitive.shape.normal_at(ray.at(t))) > 0.0
         {
             return false;

@@ -30,7 +30,8 @@ pub use film::{Film, FilmSums, FrameBuffer, Summation};
 pub use filter::Filter;
 pub use light::{BoundingSphere, DirectSample, EmissionSample, HitRadiance, Light};
 pub use material::{
-    Bsdf, BsdfEval, BsdfSample, LobeKind, Material, PdfPair, ReferenceMaterial, ShadingPoint, TransportMode,
+    Bsdf, BsdfEval, BsdfSample, LobeKind, Material, MaterialFlags, PdfPair, ReferenceMaterial, ShadingPoint,
+    TransportMode,
 };
 pub use scene::{LightSpectrum, Primitive, Scene, SurfaceHit};
 pub use texture::{FilterMode, Sampling, Texture, TexturePoint, WrapMode};

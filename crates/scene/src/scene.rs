@@ -16,7 +16,7 @@ use crate::instance::{Instance, Object};
 use crate::light::{BoundingSphere, Light};
 use crate::light_selection::light_selection_weights;
 use crate::light_tree::LightTree;
-use crate::material::{Material, ShadingPoint, SurfaceTangents};
+use crate::material::{Material, MaterialFlags, ShadingPoint, SurfaceTangents};
 use crate::medium::Media;
 use crate::shape::Shape;
 use crate::tangent;
@@ -77,7 +77,7 @@ pub struct SurfaceHit {
     pub shading_normal: Vec3,
     /// Texture coordinates: a mesh's interpolated uvs ((0, 0) on a mesh without them); on a
     /// sphere or a disc its parameterisation when the material reads them
-    /// ([`Scene::material_reads_uv`]), else (0, 0).
+    /// ([`MaterialFlags::reads_uv`]), else (0, 0).
     pub uv: Vec2,
     /// ∂p/∂u (world space, not normalised) when the material is anisotropic
     /// ([`Material::is_anisotropic`]), else zero (see [`ShadingPoint::tangent`]).
@@ -117,8 +117,7 @@ pub struct Scene {
     /// Geometry, in scene order (the order only matters for exact ties).
     pub primitives: Vec<Primitive>,
     /// Materials referenced by the primitives. Not to be changed after construction: the
-    /// scene's per-material tables (mesh attributes, anisotropy, uv use, purely specular) are
-    /// made from them then.
+    /// scene's [`MaterialFlags`] are made from them then.
     pub materials: Vec<Material>,
     /// Lights, in selection order.
     pub lights: Vec<Light>,
@@ -147,17 +146,8 @@ pub struct Scene {
     light_selection: Option<Distribution1D>,
     /// The light tree ([`Scene::light_tree`]), built on first use.
     light_tree: std::sync::OnceLock<LightTree>,
-    /// By material index: whether the material reads a mesh attribute.
-    reads_mesh_attribute: Vec<bool>,
-    /// Per material: [`Material::is_anisotropic`] (hits then carry ∂p/∂u).
-    anisotropic: Vec<bool>,
-    /// Per material: [`Scene::material_reads_uv`].
-    reads_uv: Vec<bool>,
-    /// Per material: [`Material::is_specular_only`].
-    specular_only: Vec<bool>,
-    /// Per material: [`Material::is_fibre`] (hits on the back side are skipped, see
-    /// [`Scene::alpha_keeps`]).
-    pub(crate) fibres: Vec<bool>,
+    /// By material index: what hits need to know of the material ([`Scene::material_flags`]).
+    flags: Vec<MaterialFlags>,
     /// Our BVH over the world primitives and instances (empty when [`Scene::embree`] answers
     /// the queries).
     bvh: Bvh,
@@ -200,12 +190,12 @@ impl Scene {
         let scene_box = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
         let (center, radius) = if scene_box.is_empty() { (Vec3::ZERO, 1.0) } else { scene_box.bounding_sphere() };
         let background = lights.iter().position(Light::is_environment).map(|i| i as u32);
-        let fibres: Vec<bool> = materials.iter().map(Material::is_fibre).collect();
+        let flags: Vec<MaterialFlags> = materials.iter().map(MaterialFlags::of).collect();
         // Triangles that need nothing after the geometric test (no alpha mask, not a fibre, see
         // `alpha_keeps`) are tested by the BVH itself, four at a time.
         let plain_triangle = |id: u32| match primitives.get(id as usize) {
             Some(&Primitive { shape: Shape::Triangle(triangle), alpha: None, material, .. })
-                if !fibres.get(material as usize).copied().unwrap_or(false) =>
+                if !flags.get(material as usize).is_some_and(|f| f.fibre) =>
             {
                 Some(triangle)
             }
@@ -221,10 +211,6 @@ impl Scene {
         // One emitter per light (one id per light: cannot fail).
         let own_groups: Vec<u32> = (0..lights.len() as u32).collect();
         let light_selection = light_selection(&lights, &bounding_sphere, &own_groups).unwrap_or(None);
-        let reads_mesh_attribute = materials.iter().map(|m| matches!(m.mesh_attribute(), Ok(Some(_)))).collect();
-        let anisotropic = materials.iter().map(Material::is_anisotropic).collect();
-        let reads_uv = materials.iter().map(|m| m.reads_uv() || m.perturbs_shading_normal()).collect();
-        let specular_only = materials.iter().map(Material::is_specular_only).collect();
         Self {
             name: name.into(),
             primitives,
@@ -241,11 +227,7 @@ impl Scene {
             light_spectra: Vec::new(),
             light_selection,
             light_tree: std::sync::OnceLock::new(),
-            reads_mesh_attribute,
-            anisotropic,
-            reads_uv,
-            specular_only,
-            fibres,
+            flags,
             bvh,
             #[cfg(feature = "embree")]
             embree,
@@ -262,34 +244,11 @@ impl Scene {
         "bvh"
     }
 
-    /// Whether material `index` reads a mesh attribute ([`Material::mesh_attribute`]), whose
-    /// value [`SurfaceHit::attribute`] then holds.
+    /// What hits need to know of material `index` ([`MaterialFlags`], made with the scene;
+    /// [`MaterialFlags::UNKNOWN`] for an index that names no material).
     #[inline]
-    pub fn material_reads_mesh_attribute(&self, index: u32) -> bool {
-        self.reads_mesh_attribute.get(index as usize).copied().unwrap_or(false)
-    }
-
-    /// Whether material `index` is anisotropic ([`Material::is_anisotropic`]): its hits carry
-    /// ∂p/∂u in [`SurfaceHit::tangent`].
-    #[inline]
-    pub fn material_is_anisotropic(&self, index: u32) -> bool {
-        self.anisotropic.get(index as usize).copied().unwrap_or(false)
-    }
-
-    /// Whether a hit on material `index` needs its texture coordinates: a texture of its BSDF
-    /// varies with them ([`Material::reads_uv`]), or it is a normal or bump map. Hits on spheres
-    /// and discs compute their parameterisation (an `atan2`, and on spheres an `acos`) only
-    /// then.
-    #[inline]
-    pub fn material_reads_uv(&self, index: u32) -> bool {
-        self.reads_uv.get(index as usize).copied().unwrap_or(true)
-    }
-
-    /// [`Material::is_specular_only`] of material `index` (false for an unknown index), from a
-    /// table made with the scene: every BSDF built on it is delta or absent.
-    #[inline]
-    pub fn material_is_specular_only(&self, index: u32) -> bool {
-        self.specular_only.get(index as usize).copied().unwrap_or(false)
+    pub fn material_flags(&self, index: u32) -> MaterialFlags {
+        self.flags.get(index as usize).copied().unwrap_or(MaterialFlags::UNKNOWN)
     }
 
     /// Sets the surface attributes that primitives refer to.
@@ -428,7 +387,7 @@ impl Scene {
             // costs measurable time, and no texture can be placed on it meaningfully anyway.
             (Shape::Triangle(_), _) => {}
             (Shape::Sphere(s), attributes) => {
-                if self.material_reads_uv(primitive.material) {
+                if self.material_flags(primitive.material).reads_uv {
                     uv = s.uv_at(position);
                 }
                 if matches!(attributes, Some(SurfaceAttributes::FlippedNormal)) {
@@ -437,7 +396,7 @@ impl Scene {
                 }
             }
             (Shape::Disk(d), _) => {
-                if self.material_reads_uv(primitive.material) {
+                if self.material_flags(primitive.material).reads_uv {
                     uv = d.uv_at(position);
                 }
             }
@@ -483,7 +442,7 @@ impl Scene {
     /// zero otherwise.
     #[inline]
     fn tangent(&self, primitive: &Primitive, position: Vec3, geometric_normal: Vec3) -> Vec3 {
-        if self.anisotropic.get(primitive.material as usize).copied().unwrap_or(false) {
+        if self.material_flags(primitive.material).anisotropic {
             self.differentials(primitive, position, geometric_normal).0
         } else {
             Vec3::ZERO

@@ -94,7 +94,7 @@ fn hits_on_anisotropic_materials_carry_dp_du() {
 
 /// Hits on spheres and discs carry their uv parameterisation when the material reads uvs (a
 /// checkerboard, or a normal map over a constant), and (0, 0) when it does not
-/// (`Scene::material_reads_uv`: the parameterisation is then not computed).
+/// (`MaterialFlags::reads_uv`: the parameterisation is then not computed).
 #[test]
 fn sphere_and_disc_hits_carry_uv_only_for_materials_that_read_it() {
     let checker = Material::Diffuse {
@@ -122,7 +122,7 @@ fn sphere_and_disc_hits_carry_uv_only_for_materials_that_read_it() {
         let scene = |shape| {
             Scene::new("u", vec![Primitive::new(shape, material, None)], materials.clone(), Vec::new(), camera())
         };
-        assert_eq!(scene(Shape::Sphere(sphere)).material_reads_uv(material), reads);
+        assert_eq!(scene(Shape::Sphere(sphere)).material_flags(material).reads_uv, reads);
         let on_sphere = hit(&scene(Shape::Sphere(sphere)), sphere_origin, -Vec3::Y).uv;
         let on_disk = hit(&scene(Shape::Disk(disk)), disk_origin, -Vec3::Z).uv;
         if reads {
@@ -156,7 +156,7 @@ fn the_specular_only_table_follows_the_materials() {
     let expected = [false, true, true, false];
     for (index, material) in scene.materials.iter().enumerate() {
         assert_eq!(material.is_specular_only(), expected[index], "material {index}");
-        assert_eq!(scene.material_is_specular_only(index as u32), expected[index], "table entry {index}");
+        assert_eq!(scene.material_flags(index as u32).specular_only, expected[index], "table entry {index}");
     }
-    assert!(!scene.material_is_specular_only(4));
+    assert_eq!(scene.material_flags(4), scene::MaterialFlags::UNKNOWN);
 }

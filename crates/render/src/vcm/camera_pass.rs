@@ -132,7 +132,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     // there (a purely specular material: its BSDF is delta or absent).
     let plan_at = |hit: &SurfaceHit| {
         let source = merge_source?;
-        (!scene.material_is_specular_only(hit.material)).then(|| source.plan_and_prefetch(hit.position))
+        (!scene.material_flags(hit.material).specular_only).then(|| source.plan_and_prefetch(hit.position))
     };
     // The next surface the path's ray meets, outside media, with the environment map's
     // next-event sample hinted first (see `hint`).

@@ -157,6 +157,7 @@ pub fn trace_light_path<S: SpectralMode>(
 
         if !bsdf.is_delta() {
             if techniques.store_light_vertices() {
+                let flags = scene.material_flags(hit.material);
                 let data = VertexData {
                     position: hit.position,
                     throughput: path.throughput,
@@ -166,8 +167,8 @@ pub fn trace_light_path<S: SpectralMode>(
                     normal: hit.normal,
                     shading_normal: hit.shading_normal,
                     uv: hit.uv,
-                    tangent: scene.material_is_anisotropic(hit.material).then_some(hit.tangent),
-                    attribute: scene.material_reads_mesh_attribute(hit.material).then_some(hit.attribute),
+                    tangent: flags.anisotropic.then_some(hit.tangent),
+                    attribute: flags.reads_mesh_attribute.then_some(hit.attribute),
                     fixed,
                     continuation: bsdf.continuation_probability(),
                     terminated: path.terminated,

@@ -26,7 +26,7 @@
 //!   material reads no uv texture in VCM, the driver checks) stores the attribute's three
 //!   channels rounded to the 21 most significant bits of their `f32` (sign, exponent and
 //!   12 mantissa bits: relative error ≤ 2⁻¹³ ≈ 1.2·10⁻⁴), others store uv exactly;
-//! - a vertex whose material is anisotropic ([`Scene::material_is_anisotropic`]) needs its
+//! - a vertex whose material is anisotropic ([`scene::MaterialFlags::anisotropic`]) needs its
 //!   surface tangent to rebuild the BSDF's frame: it stores the tangent's angle about the
 //!   (decoded) shading normal, measured from the `x` axis of [`math::Frame::from_z`], in 16
 //!   bits (error ≤ π/2¹⁶ ≈ 4.8·10⁻⁵ rad, plus the shading normal's 5·10⁻⁵ rad over the sine of
@@ -173,10 +173,10 @@ pub struct VertexData<S> {
     /// Texture coordinates.
     pub uv: Vec2,
     /// ∂p/∂u at the vertex when its material is anisotropic
-    /// ([`Scene::material_is_anisotropic`]), `None` otherwise.
+    /// ([`scene::MaterialFlags::anisotropic`]), `None` otherwise.
     pub tangent: Option<Vec3>,
     /// The mesh attribute value at the vertex when its material reads one
-    /// ([`Scene::material_reads_mesh_attribute`]); it is then stored instead of `uv`.
+    /// ([`scene::MaterialFlags::reads_mesh_attribute`]); it is then stored instead of `uv`.
     pub attribute: Option<Rgb>,
     /// Unit direction towards the previous vertex (the BSDF's fixed direction).
     pub fixed: Vec3,
@@ -326,9 +326,10 @@ impl<S: SpectralMode> LightVertex<S> {
         }
         let material = self.material;
         let shading_normal = octahedral::decode(self.shading_normal);
-        let (uv, attribute, tangent) = if scene.material_reads_mesh_attribute(material) {
+        let flags = scene.material_flags(material);
+        let (uv, attribute, tangent) = if flags.reads_mesh_attribute {
             (Vec2::ZERO, unpack_rgb(self.texture), Vec3::ZERO)
-        } else if scene.material_is_anisotropic(material) {
+        } else if flags.anisotropic {
             let (uv, angle) = unpack_uv_angle(self.texture);
             (uv, Rgb::BLACK, tangent_from_angle(shading_normal, angle))
         } else {
@@ -822,7 +823,7 @@ mod tests {
         };
         let camera = Camera::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z, Vec3::Y, 40.0, 4, 4);
         let scene = Scene::new("t", Vec::new(), vec![attribute, checker], Vec::new(), camera);
-        assert!(scene.material_reads_mesh_attribute(0) && !scene.material_reads_mesh_attribute(1));
+        assert!(scene.material_flags(0).reads_mesh_attribute && !scene.material_flags(1).reads_mesh_attribute);
         let generated = Vec3::new(0.3, 0.2, 0.9).normalize();
         let value = |v: &LightVertex| v.bsdf(&scene, None).unwrap().evaluate(generated).unwrap().value;
         let colour = Rgb::new(0.123_456, 0.654_321, 0.999);
