@@ -18,8 +18,8 @@ pub struct MaterialFlags {
     pub reads_uv: bool,
     /// [`Material::is_specular_only`]: every BSDF built on it is delta or absent.
     pub specular_only: bool,
-    /// [`Material::is_fibre`]: hits on the back side of the surface are skipped
-    /// ([`crate::Scene::alpha_keeps`]).
+    /// [`Material::is_fibre`]: the scene's queries skip hits on the back side of the surface
+    /// (as they skip hits an alpha mask removes).
     pub fibre: bool,
 }
 
