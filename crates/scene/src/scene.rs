@@ -202,7 +202,7 @@ impl Scene {
             _ => None,
         };
         #[cfg(feature = "embree")]
-        let embree = embree_backend(&primitives, &materials, instances.len());
+        let embree = embree_backend(&primitives, &flags, instances.len());
         #[cfg(feature = "embree")]
         let bvh = if embree.is_some() { Bvh::build(&[]) } else { Bvh::build_with_triangles(&bounds, plain_triangle) };
         #[cfg(not(feature = "embree"))]
@@ -595,18 +595,17 @@ impl LightSpectrum {
     }
 }
 
-/// The Embree backend for a scene with these world primitives, materials and number of
+/// The Embree backend for a scene with these world primitives, material flags and number of
 /// instances, when it qualifies ([`crate::accel::embree`]) and `VCM_ACCEL=bvh` does not force
 /// our BVH. A scene Embree cannot build keeps our BVH.
 #[cfg(feature = "embree")]
 fn embree_backend(
     primitives: &[Primitive],
-    materials: &[Material],
+    flags: &[MaterialFlags],
     instances: usize,
 ) -> Option<crate::accel::EmbreeAccel> {
     use crate::accel::embree;
-    let fibres: Vec<bool> = materials.iter().map(Material::is_fibre).collect();
-    if !embree::embree_requested() || !embree::qualifies(primitives, &fibres, instances) {
+    if !embree::embree_requested() || !embree::qualifies(primitives, flags, instances) {
         return None;
     }
     crate::accel::EmbreeAccel::from_primitives(primitives).ok()

@@ -24,6 +24,7 @@ use ::embree::{CommittedScene, Device, Geometry, IntersectContext, RayHit, Trian
 use math::{Ray, Vec3};
 
 use crate::Primitive;
+use crate::material::MaterialFlags;
 use crate::shape::Shape;
 
 /// The environment variable that selects the backend: `bvh` forces our BVH; anything else
@@ -57,15 +58,15 @@ impl std::fmt::Debug for EmbreeAccel {
     }
 }
 
-/// Whether a scene with these world primitives, fibre flags (by material index) and number of
-/// instances can use Embree: all triangles, no alpha masks, no fibre materials, no instances.
-pub(crate) fn qualifies(primitives: &[Primitive], fibres: &[bool], instances: usize) -> bool {
+/// Whether a scene with these world primitives, material flags (by material index) and number
+/// of instances can use Embree: all triangles, no alpha masks, no fibre materials, no instances.
+pub(crate) fn qualifies(primitives: &[Primitive], flags: &[MaterialFlags], instances: usize) -> bool {
     instances == 0
         && !primitives.is_empty()
         && primitives.iter().all(|p| {
             matches!(p.shape, Shape::Triangle(_))
                 && p.alpha.is_none()
-                && !fibres.get(p.material as usize).copied().unwrap_or(false)
+                && !flags.get(p.material as usize).is_some_and(|f| f.fibre)
         })
 }
 
