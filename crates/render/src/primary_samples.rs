@@ -99,13 +99,8 @@ impl PathDims {
         match self.sequence {
             Some((key, index)) if vertex < STRATIFIED_VERTICES => {
                 // One Sobol sequence: each number its own dimension (module doc of math::sobol).
-                let d = |j: usize| sobol::sample(index, j, key);
-                Some(VertexDims {
-                    light: [d(0), d(1)],
-                    direction: [d(2), d(3)],
-                    pick_and_lobe: [d(4), d(5)],
-                    roulette: [d(6), d(7)],
-                })
+                let [l0, l1, d0, d1, pick, lobe, r0, r1] = sobol::point(index, key);
+                Some(VertexDims { light: [l0, l1], direction: [d0, d1], pick_and_lobe: [pick, lobe], roulette: [r0, r1] })
             }
             _ => None,
         }
