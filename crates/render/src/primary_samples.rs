@@ -100,7 +100,12 @@ impl PathDims {
             Some((key, index)) if vertex < STRATIFIED_VERTICES => {
                 // One Sobol sequence: each number its own dimension (module doc of math::sobol).
                 let [l0, l1, d0, d1, pick, lobe, r0, r1] = sobol::point(index, key);
-                Some(VertexDims { light: [l0, l1], direction: [d0, d1], pick_and_lobe: [pick, lobe], roulette: [r0, r1] })
+                Some(VertexDims {
+                    light: [l0, l1],
+                    direction: [d0, d1],
+                    pick_and_lobe: [pick, lobe],
+                    roulette: [r0, r1],
+                })
             }
             _ => None,
         }
