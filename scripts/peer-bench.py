@@ -12,7 +12,9 @@ What it measures (issue #13's table; every figure is a ratio of two runs made mi
    16-spp image (sample variance over independent seeds, averaged over pixels and channels) times
    the seconds that image took, Mitsuba `path` against our `pt` with 16 iterations.
 3. SmallVCM (built from its public source with `g++ -O3 -fopenmp`), its four scenes at 512x512:
-   the wall time of the whole process for ITERATIONS iterations of `vcm`, `bpt` and `pt`, and
+   the wall time of the whole process for ITERATIONS iterations of `vcm`, `bpt` and `pt` (three
+   alternating rounds of one run of each renderer: the table gives median seconds and the median
+   and range of the rounds' ratios, since single runs here spread by ±15 %), and
    `vcm`'s relMSE after EQUAL seconds against a REFERENCE-iteration `vcm` render of ours with
    another seed (cached; its noise is part of both errors). Not SmallVCM's own: it has no seed
    option, so its equal-time render would repeat the first iterations of its reference.
@@ -341,12 +343,18 @@ def smallvcm(vcm, settings, source):
     for index, name in enumerate(SMALLVCM_SCENES):
         row = [f"{index} {name}"]
         for algorithm in ("vcm", "bpt", "pt"):
-            theirs = smallvcm_run(binary, ["-s", str(index), "-a", algorithm, "-i", str(iterations)],
-                                  scratch("smallvcm", f"{algorithm}-{index}-theirs.hdr"))
-            _, ours = vcm_render(vcm, ["--scene", str(index), "-a", algorithm, "-i", str(iterations),
-                                       "-r", "512x512", "--quiet"], scratch("smallvcm", f"{algorithm}-{index}-ours.exr"))
-            row.append((ours, theirs))
-            log(f"SmallVCM scene {index} {algorithm}: ours {ours:.2f} s, SmallVCM {theirs:.2f} s")
+            # Alternating rounds: single whole-process runs on a shared machine spread by ±15 %
+            # (docs/performance.md), so each round pairs one run of each and the table gives
+            # medians and the spread of the rounds' ratios.
+            ours_times, theirs_times = [], []
+            for _ in range(settings["timing_rounds"]):
+                theirs_times.append(smallvcm_run(binary, ["-s", str(index), "-a", algorithm, "-i", str(iterations)],
+                                                 scratch("smallvcm", f"{algorithm}-{index}-theirs.hdr")))
+                _, ours = vcm_render(vcm, ["--scene", str(index), "-a", algorithm, "-i", str(iterations), "-r",
+                                           "512x512", "--quiet"], scratch("smallvcm", f"{algorithm}-{index}-ours.exr"))
+                ours_times.append(ours)
+            row.append((ours_times, theirs_times))
+            log(f"SmallVCM scene {index} {algorithm}: ours {ours_times} s, SmallVCM {theirs_times} s")
         timing.append(row)
         reference = scratch("smallvcm", f"reference-{index}-{reference_iterations}.exr")
         if not os.path.exists(reference):
@@ -385,13 +393,21 @@ def tables(results, settings, commands, stamp):
                 f"| ours `pt` | {to:.2f} | {vo:.3g} | {vo * to:.3g} (**{vo * to / (vs * ts):.2f}×**) |", ""]
     if "smallvcm" in results:
         timing, quality = results["smallvcm"]
+        rounds = settings["timing_rounds"]
         out += [f"**SmallVCM's scenes, 512², {settings['iterations']} iterations, wall time of the whole process** "
-                "(ours / SmallVCM; target for vcm ≤ 0.4):", "",
+                f"(ours / SmallVCM; {rounds} alternating rounds of one run each: median seconds, and the median "
+                "of the rounds' ratios with their range; target for vcm ≤ 0.4):", "",
                 "| scene | vcm ours / SmallVCM s | ratio | bpt ours / SmallVCM s | ratio | pt ours / SmallVCM s | ratio |",
                 "|---|---|---|---|---|---|---|"]
+
+        def cell(ours, theirs):
+            ratios = sorted(o / t for o, t in zip(ours, theirs))
+            spread = f" ({ratios[0]:.2f}–{ratios[-1]:.2f})" if len(ratios) > 1 else ""
+            return (f" {statistics.median(ours):.2f} / {statistics.median(theirs):.2f} | "
+                    f"{statistics.median(ratios):.2f}{spread} |")
+
         for row in timing:
-            cells = "".join(f" {o:.2f} / {t:.2f} | {o / t:.2f} |" for o, t in row[1:])
-            out.append(f"| {row[0]} |{cells}")
+            out.append(f"| {row[0]} |" + "".join(cell(o, t) for o, t in row[1:]))
         out += ["", f"**VCM at equal time ({settings['equal_seconds']} s)**, relMSE against a "
                 f"{settings['reference']}-iteration `vcm` render of ours with seed {REFERENCE_SEED} "
                 "(target ≤ 0.5):", "",
@@ -427,11 +443,11 @@ def main():
     if not os.access(args.vcm, os.X_OK):
         fail(f"'{args.vcm}' is not an executable: run cargo build --release first")
     settings = {"cornell_spp": 256, "seeds": 3, "matpreview_spp": 16, "matpreview_renders": 4,
-                "iterations": 8, "equal_seconds": 10, "reference": 256, "caustic_spp": 64,
+                "iterations": 8, "timing_rounds": 3, "equal_seconds": 10, "reference": 256, "caustic_spp": 64,
                 "caustic_reference": 4000}
     if args.quick:
         settings = {"cornell_spp": 8, "seeds": 1, "matpreview_spp": 2, "matpreview_renders": 2,
-                    "iterations": 1, "equal_seconds": 1, "reference": 4, "caustic_spp": 4,
+                    "iterations": 1, "timing_rounds": 1, "equal_seconds": 1, "reference": 4, "caustic_spp": 4,
                     "caustic_reference": 8}
     flags = " --quick" if args.quick else ""
     commands = [f"scripts/peer-bench.py{flags}" + (f" --only {args.only}" if args.only else "")]
