@@ -126,9 +126,20 @@ fn hash64(mut z: u64) -> u64 {
 /// `[0, 1)` (a multiple of `2⁻²⁴`).
 #[inline]
 pub fn sample(index: u32, dimension: usize, key: u64) -> f32 {
-    let k = hash64(key ^ (dimension as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)) as u32;
-    let x = permute_upwards(raw_reversed(index, dimension), k).reverse_bits();
-    (x >> 8) as f32 * (1.0 / 16_777_216.0)
+    scrambled(raw_reversed(index, dimension), dimension_key(key, dimension))
+}
+
+/// The scramble key of dimension `dimension` for the point key `key`.
+#[inline(always)]
+fn dimension_key(key: u64, dimension: usize) -> u32 {
+    hash64(key ^ (dimension as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)) as u32
+}
+
+/// A coordinate in `[0, 1)` from its unscrambled bits (reversed, [`raw_reversed`]) and its
+/// dimension's key: Owen-scrambled, reversed back, rounded down to a multiple of `2⁻²⁴`.
+#[inline(always)]
+fn scrambled(reversed: u32, key: u32) -> f32 {
+    (permute_upwards(reversed, key).reverse_bits() >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
 /// The columns of [`REVERSED`] by bit: `BY_BIT[k][j] = REVERSED[j][k]`, so that one step of
@@ -163,11 +174,10 @@ pub fn point(index: u32, key: u64) -> [f32; DIMENSIONS] {
         }
         i &= i - 1;
     }
-    let keys: [u32; DIMENSIONS] =
-        std::array::from_fn(|j| hash64(key ^ (j as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)) as u32);
+    let keys: [u32; DIMENSIONS] = std::array::from_fn(|j| dimension_key(key, j));
     let mut out = [0.0f32; DIMENSIONS];
     for ((o, &x), &k) in out.iter_mut().zip(&raw).zip(&keys) {
-        *o = (permute_upwards(x, k).reverse_bits() >> 8) as f32 * (1.0 / 16_777_216.0);
+        *o = scrambled(x, k);
     }
     out
 }
