@@ -14,6 +14,7 @@ pub mod ray;
 pub mod rng;
 pub mod sobol;
 pub mod special;
+pub mod turns;
 pub mod warp;
 
 pub use bounds::Aabb;
@@ -24,6 +25,7 @@ pub use pdf::{PdfA, PdfW};
 pub use prefetch::prefetch;
 pub use ray::Ray;
 pub use rng::Rng;
+pub use turns::sin_cos_turns;
 
 /// π in single precision.
 pub const PI: f32 = std::f32::consts::PI;

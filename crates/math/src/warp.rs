@@ -2,15 +2,15 @@
 //! inverse (`warp(inverse(x)) == x`). Densities on the sphere are per unit solid angle; densities
 //! on discs and triangles are per unit area.
 
-use crate::{INV_PI, PI};
+use crate::{INV_PI, PI, sin_cos_turns};
 use glam::{Vec2, Vec3};
 
 /// Cosine-weighted direction on the +z hemisphere. Density `cos θ / π` per steradian.
 #[inline]
 pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
-    let phi = 2.0 * PI * u[0];
+    let (sin_phi, cos_phi) = sin_cos_turns(u[0]);
     let r = (1.0 - u[1]).max(0.0).sqrt();
-    Vec3::new(phi.cos() * r, phi.sin() * r, u[1].sqrt())
+    Vec3::new(cos_phi * r, sin_phi * r, u[1].sqrt())
 }
 
 /// Density of [`cosine_hemisphere`] per steradian for a direction with local `cos θ`
@@ -30,10 +30,10 @@ pub fn cosine_hemisphere_inverse(d: Vec3) -> [f32; 2] {
 /// density `(n+1)/(2π)·cosⁿ α` per steradian on the +z hemisphere, 0 elsewhere.
 #[inline]
 pub fn power_cosine(u: [f32; 2], exponent: f32) -> Vec3 {
-    let phi = 2.0 * PI * u[0];
+    let (sin_phi, cos_phi) = sin_cos_turns(u[0]);
     let cos_theta = u[1].powf(1.0 / (exponent + 1.0));
     let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-    Vec3::new(phi.cos() * sin_theta, phi.sin() * sin_theta, cos_theta)
+    Vec3::new(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
 }
 
 /// Density of [`power_cosine`] per steradian at local `cos α`.
@@ -51,10 +51,10 @@ pub fn power_cosine_inverse(d: Vec3, exponent: f32) -> [f32; 2] {
 /// Uniform direction on the unit sphere. Density `1/(4π)` per steradian.
 #[inline]
 pub fn uniform_sphere(u: [f32; 2]) -> Vec3 {
-    let phi = 2.0 * PI * u[0];
+    let (sin_phi, cos_phi) = sin_cos_turns(u[0]);
     let z = 1.0 - 2.0 * u[1];
     let r = (1.0 - z * z).max(0.0).sqrt();
-    Vec3::new(phi.cos() * r, phi.sin() * r, z)
+    Vec3::new(cos_phi * r, sin_phi * r, z)
 }
 
 /// Density of [`uniform_sphere`]: `1/(4π)` per steradian.
@@ -75,8 +75,10 @@ pub fn concentric_disc(u: [f32; 2]) -> Vec2 {
     if a == 0.0 && b == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, phi) = if a * a > b * b { (a, (PI / 4.0) * (b / a)) } else { (b, PI / 2.0 - (PI / 4.0) * (a / b)) };
-    Vec2::new(r * phi.cos(), r * phi.sin())
+    // The angle in turns: π/4 is an eighth of a turn.
+    let (r, turns) = if a * a > b * b { (a, 0.125 * (b / a)) } else { (b, 0.25 - 0.125 * (a / b)) };
+    let (sin_phi, cos_phi) = sin_cos_turns(turns);
+    Vec2::new(r * cos_phi, r * sin_phi)
 }
 
 /// Density of [`concentric_disc`]: `1/π` per unit area.

@@ -382,7 +382,7 @@ fn tangent_angle(normal_code: u32, tangent: Vec3) -> u16 {
 #[inline]
 fn tangent_from_angle(normal: Vec3, angle: u16) -> Vec3 {
     let frame = Frame::from_z(normal);
-    let (sin, cos) = (angle as f32 * (std::f32::consts::TAU / 65536.0)).sin_cos();
+    let (sin, cos) = math::sin_cos_turns(angle as f32 * (1.0 / 65536.0));
     frame.x * cos + frame.y * sin
 }
 

@@ -246,17 +246,16 @@ impl EnvMapLight {
         let f = warp::bilinear([w, v], corners.map(|texel| texel.density));
         let (fx, fy) = (f.x, f.y);
         let (s, t) = ((i0 as f32 + fx) / d.width_f32, (j0 as f32 + fy) / d.cells_y_f32);
-        let theta = t.min(1.0) * PI;
+        // θ = πt is half a turn times t; φ = 2π·u_map is u_map turns.
         let mut u_map = s + d.half_texel;
         if u_map >= 1.0 {
             u_map -= 1.0;
         }
-        let phi = 2.0 * PI * u_map;
-        let (sin_theta, cos_theta) = theta.sin_cos();
+        let (sin_theta, cos_theta) = math::sin_cos_turns(0.5 * t.min(1.0));
         if sin_theta.is_nan() || sin_theta <= 0.0 {
             return None;
         }
-        let (sin_phi, cos_phi) = phi.sin_cos();
+        let (sin_phi, cos_phi) = math::sin_cos_turns(u_map);
         let local = Vec3::new(sin_phi * sin_theta, cos_theta, -cos_phi * sin_theta);
         let [c0, c1, c2] = d.to_world;
         let direction = (c0 * local.x + c1 * local.y + c2 * local.z).normalize();

@@ -12,10 +12,12 @@ pub fn square_to_sphere(p: Vec2) -> Vec3 {
     // Signed distance from the square's diagonal edges |u| + |v| = 1 (positive inside: +z).
     let signed_distance = 1.0 - (up + vp);
     let r = 1.0 - signed_distance.abs();
-    let phi = if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 } * (PI / 4.0);
+    // The azimuth in eighths of a turn (π/4 each), within the first quadrant.
+    let eighths = if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 };
+    let (sin_phi, cos_phi) = math::sin_cos_turns(0.125 * eighths);
     let z = (1.0 - r * r).copysign(signed_distance);
     let s = r * (2.0 - r * r).max(0.0).sqrt();
-    Vec3::new(phi.cos().copysign(u) * s, phi.sin().copysign(v) * s, z)
+    Vec3::new(cos_phi.copysign(u) * s, sin_phi.copysign(v) * s, z)
 }
 
 /// The square point in `[0, 1]²` of the unit direction `d` (the inverse of

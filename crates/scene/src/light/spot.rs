@@ -193,7 +193,7 @@ impl SpotLight {
         // Uniform in the cutoff cone: cos θ uniform in [cos c, 1].
         let cos_theta = 1.0 - u_direction[1] * (1.0 - self.cos_cutoff);
         let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-        let (sin_phi, cos_phi) = (2.0 * PI * u_direction[0]).sin_cos();
+        let (sin_phi, cos_phi) = math::sin_cos_turns(u_direction[0]);
         let local = Vec3::new(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta);
         let energy = match self.texture {
             None => self.intensity * self.falloff(cos_theta),

@@ -38,11 +38,11 @@ impl Clearcoat {
 
     /// A microfacet normal with density `D(m) cos θ_m`.
     pub(super) fn sample_normal(&self, u: [f32; 2]) -> Vec3 {
-        let phi = 2.0 * PI * u[0];
+        let (sin_phi, cos_phi) = math::sin_cos_turns(u[0]);
         let a2 = sqr(self.alpha);
         let cos2 = ((1.0 - a2.powf(1.0 - u[1])) / (1.0 - a2)).clamp(0.0, 1.0);
         let sin = (1.0 - cos2).sqrt();
-        Vec3::new(phi.cos() * sin, phi.sin() * sin, cos2.sqrt())
+        Vec3::new(cos_phi * sin, sin_phi * sin, cos2.sqrt())
     }
 
     /// The lobe's value for `wi`, `wo` above the surface with half vector `h` (on +z) at an

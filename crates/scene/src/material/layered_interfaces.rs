@@ -312,8 +312,8 @@ impl HenyeyGreenstein {
             ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
         };
         let sin = (1.0 - mu * mu).max(0.0).sqrt();
-        let phi = 2.0 * math::PI * u[1];
-        let local = Vec3::new(sin * phi.cos(), sin * phi.sin(), mu);
+        let (sin_phi, cos_phi) = math::sin_cos_turns(u[1]);
+        let local = Vec3::new(sin * cos_phi, sin * sin_phi, mu);
         let wi = Frame::from_z(-wo).to_world(local).normalize();
         (wi, self.p(wo, wi))
     }

@@ -71,8 +71,8 @@ impl PhaseFunction {
         }
         .clamp(-1.0, 1.0);
         let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-        let phi = 2.0 * PI * u[1];
-        let local = Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta);
+        let (sin_phi, cos_phi) = math::sin_cos_turns(u[1]);
+        let local = Vec3::new(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta);
         let direction = Frame::from_z(-fixed).to_world(local).normalize();
         PhaseSample { direction, pdf: self.evaluate(fixed, direction) }
     }

@@ -3,7 +3,7 @@
 //! Normals", JCGT 7(4)). Directions are in the local frame of the macro surface (`z` normal);
 //! `ax`, `ay` are the roughnesses along `x` and `y`.
 
-use math::{INV_PI, PI, Vec3, sqr};
+use math::{INV_PI, Vec3, sqr};
 
 /// `D(m) = 1 / (π αx αy (mx²/αx² + my²/αy² + mz²)²)` per unit solid angle, 0 below the surface.
 #[inline]
@@ -38,10 +38,10 @@ pub(super) fn sample_visible(ax: f32, ay: f32, w: Vec3, u: [f32; 2]) -> Vec3 {
     // A point on the projected disc: a uniform disc whose lower half is squashed by the
     // projection of the hemisphere.
     let r = u[0].sqrt();
-    let phi = 2.0 * PI * u[1];
-    let p1 = r * phi.cos();
+    let (sin_phi, cos_phi) = math::sin_cos_turns(u[1]);
+    let p1 = r * cos_phi;
     let s = 0.5 * (1.0 + vh.z);
-    let p2 = (1.0 - s) * (1.0 - sqr(p1)).max(0.0).sqrt() + s * r * phi.sin();
+    let p2 = (1.0 - s) * (1.0 - sqr(p1)).max(0.0).sqrt() + s * r * sin_phi;
     let p3 = (1.0 - sqr(p1) - sqr(p2)).max(0.0).sqrt();
     let nh = p1 * t1 + p2 * t2 + p3 * vh;
     // Unstretch.
