@@ -208,6 +208,8 @@ pub struct Renderer<'a> {
     integrator: Integrator,
     frame: FrameBuffer,
     iteration: u64,
+    /// The per-pixel integrators' splatting buffers, kept across iterations.
+    spread: splat_frame::SpreadScratch,
 }
 
 impl<'a> Renderer<'a> {
@@ -258,7 +260,15 @@ impl<'a> Renderer<'a> {
             }),
         };
         let frame = FrameBuffer::new(scene.camera.width, scene.camera.height);
-        Ok(Self { scene, settings: settings.clone(), pool, integrator, frame, iteration: first_iteration })
+        Ok(Self {
+            scene,
+            settings: settings.clone(),
+            pool,
+            integrator,
+            frame,
+            iteration: first_iteration,
+            spread: Default::default(),
+        })
     }
 
     /// Renders the next iteration into [`Renderer::frame`]; returns the number of rejected
@@ -269,21 +279,27 @@ impl<'a> Renderer<'a> {
             // The frame was taken ([`Renderer::take_frame`]) and not given back.
             self.frame = FrameBuffer::new(scene.camera.width, scene.camera.height);
         }
-        let frame = &mut self.frame;
+        let (frame, spread) = (&mut self.frame, &mut self.spread);
         let integrator = &mut self.integrator;
         let rejected = self.pool.install(|| match integrator {
             Integrator::Vcm(engine) => engine.run_iteration(scene, seed, iteration, frame),
             Integrator::PathTracing(tracer) => {
                 let spectral = tracer.spectral;
-                render_iteration(scene, seed, iteration, tracer.primary_samples, frame, |ray, rng, index, dims| {
-                    // Spectral mode: the pixel's wavelengths stratified over the iterations.
-                    let u = spectral.then(|| crate::wavelength_sequence::per_index_sample(seed, iteration, index));
-                    tracer.radiance_with(scene, ray, rng, u, dims)
-                })
+                render_iteration(
+                    scene,
+                    (seed, iteration),
+                    tracer.primary_samples,
+                    (frame, spread),
+                    |ray, rng, index, dims| {
+                        // Spectral mode: the pixel's wavelengths stratified over the iterations.
+                        let u = spectral.then(|| crate::wavelength_sequence::per_index_sample(seed, iteration, index));
+                        tracer.radiance_with(scene, ray, rng, u, dims)
+                    },
+                )
             }
             Integrator::EyeLight => {
                 let independent = PrimarySamples::Independent;
-                render_iteration(scene, seed, iteration, independent, frame, |ray, _, _, _| {
+                render_iteration(scene, (seed, iteration), independent, (frame, spread), |ray, _, _, _| {
                     eye_light::eye_light(scene, &ray)
                 })
             }
@@ -420,10 +436,9 @@ pub fn render_with(scene: &Scene, settings: &RenderSettings, control: Control) -
 /// samples are then spread over the pixels their filter reaches ([`crate::splat_frame`]).
 fn render_iteration(
     scene: &Scene,
-    seed: u64,
-    iteration: u64,
+    (seed, iteration): (u64, u64),
     samples: PrimarySamples,
-    frame: &mut FrameBuffer,
+    (frame, spread): (&mut FrameBuffer, &mut splat_frame::SpreadScratch),
     radiance: impl Fn(math::Ray, &mut Rng, u64, PathDims) -> Rgb + Sync,
 ) -> u64 {
     let width = frame.width as usize;
@@ -455,6 +470,6 @@ fn render_iteration(
             rejected
         })
         .sum();
-    splat_frame::spread_camera_pass(&scene.camera, seed, iteration, &mut frame.pixels, None, None);
+    splat_frame::spread_camera_pass(&scene.camera, seed, iteration, &mut frame.pixels, None, None, spread);
     rejected
 }

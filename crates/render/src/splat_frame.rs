@@ -57,6 +57,21 @@ fn reach_of(radius: f32) -> usize {
     ((radius + 0.5).ceil() as usize).saturating_sub(1)
 }
 
+/// Buffers of [`spread_lattice`] and [`spread_camera_pass`], kept from iteration to iteration:
+/// allocated anew each time, the two image-sized buffers (12 bytes per value each) came fresh
+/// from the kernel every iteration, whose page faults and unmapping cost a two-thread `pt`
+/// render of Mitsuba's Cornell box about 3 % of its time (docs/performance.md, "Buffers kept
+/// across iterations"). Reusing them changes no value.
+#[derive(Clone, Debug, Default)]
+pub struct SpreadScratch {
+    /// The values as flat float triples (the row pass's input, then the column pass's output).
+    triples: Vec<[f32; 3]>,
+    /// The row pass's sums, three floats per value.
+    along_rows: Vec<f32>,
+    /// The per-family values of the camera pass, five per pixel.
+    families: Vec<Rgb>,
+}
+
 /// Replaces `values` (`stride` values per pixel, row-major, the camera samples' own values) by
 /// their splatted image, for samples at their pixel's corner plus `offset` (as
 /// [`Camera::sample_primary`] places them when splatting): value `c` of pixel `j` becomes
@@ -69,7 +84,13 @@ fn reach_of(radius: f32) -> usize {
 /// rows with the x weights, then along the columns with the y weights (2·(2·reach + 1)
 /// multiply-adds per value instead of (2·reach + 1)²). Parallel over rows; each pixel sums in
 /// a fixed order, so the result does not depend on the thread count.
-pub fn spread_lattice(camera: &Camera, offset: [f32; 2], values: &mut [Rgb], stride: usize) {
+pub fn spread_lattice(
+    camera: &Camera,
+    offset: [f32; 2],
+    values: &mut [Rgb],
+    stride: usize,
+    scratch: &mut SpreadScratch,
+) {
     let (width, height) = (camera.width as usize, camera.height as usize);
     assert_eq!(values.len(), width * height * stride, "stride values per pixel");
     if stride == 0 || values.is_empty() {
@@ -90,14 +111,17 @@ pub fn spread_lattice(camera: &Camera, offset: [f32; 2], values: &mut [Rgb], str
     let row_len = width * per_pixel;
     // Non-finite values count as black: they enter the flat copy as zeros, which adds exactly
     // zero where the pairwise sum skipped them.
-    let mut triples: Vec<[f32; 3]> =
-        values.iter().map(|v| if v.is_finite() { [v.r, v.g, v.b] } else { [0.0; 3] }).collect();
+    let SpreadScratch { triples, along_rows, .. } = scratch;
+    triples.clear();
+    triples.par_extend(values.par_iter().map(|v| if v.is_finite() { [v.r, v.g, v.b] } else { [0.0; 3] }));
     // Along the rows: each pixel x gathers the samples sx = x + reach − k of its row for
     // k = 0..=2·reach, in increasing k (tap k outer, so each pass is a multiply-add over a
     // contiguous run without per-tap range checks, and every pixel still sums its taps in the
     // pairwise order); taps outside the row are skipped.
-    let mut along_rows = vec![0.0f32; triples.len() * 3];
+    along_rows.resize(triples.len() * 3, 0.0);
     along_rows.par_chunks_mut(row_len).zip(triples.as_flattened().par_chunks(row_len)).for_each(|(out, source)| {
+        // The buffer holds the previous iteration's sums.
+        out.fill(0.0);
         for (k, &w) in wx.iter().enumerate() {
             // sx ∈ [0, width) ⇔ x ∈ [k − reach, width + k − reach).
             let x_first = k.saturating_sub(reach);
@@ -115,6 +139,7 @@ pub fn spread_lattice(camera: &Camera, offset: [f32; 2], values: &mut [Rgb], str
     // N_j per axis (the product is Camera::splat_normalization).
     let nx: Vec<f64> = (0..width).map(|x| filter.clipped_integral_1d(x as f32 + 0.5, width as f32)).collect();
     let ny: Vec<f64> = (0..height).map(|y| filter.clipped_integral_1d(y as f32 + 0.5, height as f32)).collect();
+    let along_rows = &along_rows[..];
     // Along the columns (into the flat copy, no longer needed), then the division by N_j on
     // the way back into `values`. The first tap of a row (there is one: k = reach, sy = y)
     // writes `0 + v·w`, what adding it to a zeroed row gives, so the rows need no clearing.
@@ -166,23 +191,27 @@ pub fn spread_camera_pass(
     frame: &mut [Rgb],
     families: Option<&mut Vec<FamilyValues>>,
     techniques: Option<&mut TechniqueFrame>,
+    scratch: &mut SpreadScratch,
 ) {
     if !camera.splats_camera_samples() {
         return;
     }
     debug_assert_eq!(camera.film, FilmMode::Splat);
     let offset = film_offset(seed, iteration);
-    spread_lattice(camera, offset, frame, 1);
+    spread_lattice(camera, offset, frame, 1, scratch);
     if let Some(families) = families.filter(|f| !f.is_empty()) {
-        let mut flat: Vec<Rgb> = families.iter().flat_map(|f| f.0).collect();
-        spread_lattice(camera, offset, &mut flat, 5);
+        let mut flat = std::mem::take(&mut scratch.families);
+        flat.clear();
+        flat.extend(families.iter().flat_map(|f| f.0));
+        spread_lattice(camera, offset, &mut flat, 5, scratch);
         for (family, values) in families.iter_mut().zip(flat.chunks_exact(5)) {
             family.0.copy_from_slice(values);
         }
+        scratch.families = flat;
     }
     if let Some(techniques) = techniques {
         let stride = techniques.layout.len();
-        spread_lattice(camera, offset, &mut techniques.values, stride);
+        spread_lattice(camera, offset, &mut techniques.values, stride, scratch);
     }
 }
 
@@ -239,6 +268,8 @@ mod tests {
             Filter::from_desc(&scene::desc::FilterDesc::Gaussian { stddev: 1.0, radius: 3.4 }).unwrap(),
         ];
         let (width, height) = (23u32, 17u32);
+        // One scratch for every case: what a case leaves in it must not reach the next.
+        let mut scratch = SpreadScratch::default();
         for filter in filters {
             let mut camera = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, width, height).with_filter(filter);
             camera.film = FilmMode::Splat;
@@ -255,7 +286,7 @@ mod tests {
                     .collect();
                 let expected = pairwise(&camera, &sample_positions(&camera, 7, iteration), &values, stride);
                 let mut spread = values.clone();
-                spread_lattice(&camera, film_offset(7, iteration), &mut spread, stride);
+                spread_lattice(&camera, film_offset(7, iteration), &mut spread, stride, &mut scratch);
                 assert!(spread.iter().all(|v| v.is_finite()), "non-finite values count as black");
                 for (i, (got, want)) in spread.iter().zip(&expected).enumerate() {
                     for (g, w) in [got.r, got.g, got.b].into_iter().zip(want) {
@@ -325,6 +356,9 @@ mod tests {
             Filter::Tent { radius: 1.5 },
             Filter::Box,
         ];
+        // One scratch for every case (strides 1, 3, 5, then 1 again): reused buffers must give
+        // the bits of the reference.
+        let mut scratch = SpreadScratch::default();
         for filter in filters {
             let mut camera = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, 19, 11).with_filter(filter);
             camera.film = FilmMode::Splat;
@@ -340,7 +374,7 @@ mod tests {
                     .collect();
                 let offset = film_offset(13, iteration);
                 let (mut flat, mut rgb) = (values.clone(), values);
-                spread_lattice(&camera, offset, &mut flat, stride);
+                spread_lattice(&camera, offset, &mut flat, stride, &mut scratch);
                 spread_lattice_rgb(&camera, offset, &mut rgb, stride);
                 for (i, (a, b)) in flat.iter().zip(&rgb).enumerate() {
                     let bits = |v: &Rgb| [v.r.to_bits(), v.g.to_bits(), v.b.to_bits()];
@@ -384,7 +418,7 @@ mod tests {
             let camera = camera.with_filter(filter);
             for iteration in 0..64 {
                 let mut values = vec![Rgb::splat(1.0); camera.pixel_count()];
-                spread_lattice(&camera, film_offset(9, iteration), &mut values, 1);
+                spread_lattice(&camera, film_offset(9, iteration), &mut values, 1, &mut SpreadScratch::default());
                 for y in 3..height - 3 {
                     for x in 3..width - 3 {
                         let v = values[(y * width + x) as usize].r;

@@ -3,6 +3,8 @@
 
 use std::borrow::Cow;
 
+use rayon::prelude::*;
+
 use spectrum::Rgb;
 
 /// One iteration's image: the estimate of every pixel from this iteration only.
@@ -250,42 +252,72 @@ impl Film {
     /// check [`Film::has_room`] first.
     pub fn add_iteration(&mut self, frame: &FrameBuffer, rejected_samples: u64) {
         assert_eq!((frame.width, frame.height), (self.width, self.height), "frame size must match the film");
+        // In parallel over the pixels (on the caller's rayon pool): every pixel's sums take the
+        // same operations whatever the split, and the fixed-point film's count and largest
+        // value are a sum and a maximum, so the film is the same bit for bit. (Added by one
+        // thread, a 512² iteration kept the other idle for about a millisecond:
+        // docs/performance.md, "Buffers kept across iterations".)
         let mut rejected = rejected_samples;
         match &mut self.sums {
             FilmSums::Float { sums, squares } => {
-                // Without the sums of squares `squares` is empty and only the sums are added.
-                for (i, (sum, pixel)) in sums.iter_mut().zip(&frame.pixels).enumerate() {
+                let add = |sum: &mut [f64; 3], square: Option<&mut [f64; 3]>, pixel: &Rgb| {
                     let value = pixel.to_array().map(f64::from);
                     for c in 0..3 {
                         sum[c] += value[c];
                     }
-                    if let Some(squares) = squares.get_mut(i) {
+                    if let Some(square) = square {
                         for c in 0..3 {
-                            squares[c] += value[c] * value[c];
+                            square[c] += value[c] * value[c];
                         }
                     }
+                };
+                // Without the sums of squares `squares` is empty and only the sums are added.
+                if squares.is_empty() {
+                    sums.par_iter_mut().zip(&frame.pixels).for_each(|(sum, pixel)| add(sum, None, pixel));
+                } else {
+                    sums.par_iter_mut()
+                        .zip(squares.par_iter_mut())
+                        .zip(&frame.pixels)
+                        .for_each(|((sum, square), pixel)| add(sum, Some(square), pixel));
                 }
             }
             FilmSums::Fixed { sums, squares, largest } => {
-                for (i, (sum, pixel)) in sums.iter_mut().zip(&frame.pixels).enumerate() {
+                // Per pixel: (rejected, largest |v| added).
+                let add = |sum: &mut [i128; 3], square: Option<&mut [i128; 3]>, pixel: &Rgb| -> (u64, f32) {
                     let value = pixel.to_array().map(f64::from);
                     if !value.iter().all(|v| v.abs() < FIXED_LIMIT) {
-                        rejected += 1;
-                        continue;
+                        return (1, 0.0);
                     }
+                    let mut most = 0.0f32;
                     for c in 0..3 {
                         // v·2⁶⁴ and v²·2⁴⁰ are exact in f64 for an f32 v; rounding them to
                         // integers is the only rounding, and the additions are exact.
                         sum[c] = sum[c].wrapping_add((value[c] * SUM_SCALE).round() as i128);
-                        *largest = largest.max(value[c].abs() as f32);
+                        most = most.max(value[c].abs() as f32);
                     }
-                    if let Some(squares) = squares.get_mut(i) {
+                    if let Some(square) = square {
                         for c in 0..3 {
-                            let square = (value[c] * value[c] * SQUARE_SCALE).round() as i128;
-                            squares[c] = squares[c].wrapping_add(square);
+                            let s = (value[c] * value[c] * SQUARE_SCALE).round() as i128;
+                            square[c] = square[c].wrapping_add(s);
                         }
                     }
-                }
+                    (0, most)
+                };
+                let combine = |a: (u64, f32), b: (u64, f32)| (a.0 + b.0, a.1.max(b.1));
+                let (count, most) = if squares.is_empty() {
+                    sums.par_iter_mut()
+                        .zip(&frame.pixels)
+                        .map(|(sum, pixel)| add(sum, None, pixel))
+                        .reduce(|| (0, 0.0), combine)
+                } else {
+                    sums.par_iter_mut()
+                        .zip(squares.par_iter_mut())
+                        .zip(&frame.pixels)
+                        .map(|((sum, square), pixel)| add(sum, Some(square), pixel))
+                        .reduce(|| (0, 0.0), combine)
+                };
+                rejected += count;
+                *largest = largest.max(most);
             }
         }
         self.iterations += 1;

@@ -480,6 +480,8 @@ struct Engine<S: SpectralMode> {
     merge_groups: Vec<MergeGroup>,
     /// The iteration's light-tracing splats, summed per pixel.
     splat_sums: SplatSums,
+    /// The camera samples' splatting buffers, kept across iterations.
+    spread: crate::splat_frame::SpreadScratch,
 }
 
 /// One chunk of light sub-paths: vertices, per-path ends (relative), splats.
@@ -510,6 +512,7 @@ impl<S: SpectralMode> Engine<S> {
             stats: IterationStats::default(),
             merge_groups: Vec::new(),
             splat_sums: SplatSums::default(),
+            spread: Default::default(),
         }
     }
 
@@ -638,6 +641,7 @@ impl<S: SpectralMode> Engine<S> {
                 &mut frame.pixels,
                 self.family_frames.as_mut(),
                 self.technique_frame.as_mut(),
+                &mut self.spread,
             );
         }
         let camera_pass = start.elapsed() - light_pass - grid_build;
@@ -790,6 +794,7 @@ impl<S: SpectralMode> Engine<S> {
             &mut frame.pixels,
             family_frames.as_deref_mut(),
             self.technique_frame.as_mut(),
+            &mut self.spread,
         );
         let camera_pass = start.elapsed() - light_pass;
         let splats = self.splat_sums.finish(
