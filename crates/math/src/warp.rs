@@ -2,6 +2,7 @@
 //! inverse (`warp(inverse(x)) == x`). Densities on the sphere are per unit solid angle; densities
 //! on discs and triangles are per unit area.
 
+use crate::turns::select_greater;
 use crate::{INV_PI, PI, sin_cos_turns};
 use glam::{Vec2, Vec3};
 
@@ -75,8 +76,13 @@ pub fn concentric_disc(u: [f32; 2]) -> Vec2 {
     if a == 0.0 && b == 0.0 {
         return Vec2::ZERO;
     }
-    // The angle in turns: π/4 is an eighth of a turn.
-    let (r, turns) = if a * a > b * b { (a, 0.125 * (b / a)) } else { (b, 0.25 - 0.125 * (a / b)) };
+    // The angle in turns: π/4 is an eighth of a turn. Written as selects around one division
+    // (the operations of the two branches, so the same bits): which coordinate is larger is a
+    // coin flip, a branch mispredicted half the time.
+    let (a2, b2) = (a * a, b * b);
+    let (r, minor) = (select_greater(a2, b2, a, b), select_greater(a2, b2, b, a));
+    let t = minor / r;
+    let turns = select_greater(a2, b2, 0.125 * t, 0.25 - 0.125 * t);
     let (sin_phi, cos_phi) = sin_cos_turns(turns);
     Vec2::new(r * cos_phi, r * sin_phi)
 }
