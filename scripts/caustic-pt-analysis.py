@@ -35,13 +35,14 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_SCENE = os.path.join(ROOT, "..", "shared", "scenes", "mitsuba", "caustic-cbox", "cbox.xml")
 
 
-def read_pfm_function():
-    """`read_pfm` of scripts/equal-spp-variance.py (a file name with a hyphen: loaded by path)."""
+def equal_spp_variance():
+    """scripts/equal-spp-variance.py as a module (a file name with a hyphen: loaded by path), for
+    its `read_pfm` and `import_mitsuba`."""
     spec = importlib.util.spec_from_file_location("equal_spp_variance",
                                                   os.path.join(ROOT, "scripts", "equal-spp-variance.py"))
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module.read_pfm
+    return module
 
 
 def ours(vcm, scene, size, spp, seed, extra, output):
@@ -65,17 +66,11 @@ def main():
     parser.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant [llvm_ad_rgb]")
     parser.add_argument("--vcm", default=os.path.join(ROOT, "target", "release", "vcm"))
     args = parser.parse_args()
-    try:
-        import mitsuba as mi
-        import numpy as np
-    except ImportError as e:
-        sys.exit(f"needs mitsuba and numpy ({e}); run it with target/peer-bench/venv/bin/python")
-    if not os.path.exists(args.vcm):
-        sys.exit(f"{args.vcm} not found: run `cargo build --release` first")
+    helpers = equal_spp_variance()
+    mi, np = helpers.import_mitsuba(args.vcm, args.variant)
     if not os.path.exists(args.scene):
         sys.exit(f"{args.scene} not found")
-    read_pfm = read_pfm_function()
-    mi.set_variant(args.variant)
+    read_pfm = helpers.read_pfm
     n, spp = args.resolution, args.spp
     size = f"{n}x{n}"
     rules = [("albedo (default)", []), ("--rr-depth 5", ["--rr-depth", "5"])]
@@ -112,7 +107,7 @@ def main():
     print(f"| Mitsuba 3 `{args.variant}` `path` | {m:.2f} | |")
     for name, _ in rules:
         s = statistics.median(our_seconds[name])
-        print(f"| ours `pt`, roulette {name} | {s:.2f} | {s / m:.2f} |")
+        print(f"| ours `pt`, roulette {name} | {s:.2f} | {s / m:.2f} |" if m > 0 else f"| ours `pt`, roulette {name} | {s:.2f} | – |")
 
     print(f"\nRoulette efficiency, {args.seeds} seeds per rule: per-pixel relative variance × median seconds")
     print("| roulette | relative variance | median seconds | product | / default |")
@@ -125,7 +120,9 @@ def main():
         s = statistics.median(seconds[name])
         products[name] = relative * s
         base = products[rules[0][0]]
-        print(f"| {name} | {relative:.4f} | {s:.2f} | {products[name]:.4f} | {products[name] / base:.2f} |")
+        # The summary line gives seconds to 0.01 s: a tiny render may read 0.
+        ratio = f"{products[name] / base:.2f}" if base > 0 else "–"
+        print(f"| {name} | {relative:.4f} | {s:.2f} | {products[name]:.4f} | {ratio} |")
 
 
 if __name__ == "__main__":

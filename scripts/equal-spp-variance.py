@@ -62,6 +62,20 @@ def dilate(mask, steps, np):
     return out
 
 
+def import_mitsuba(vcm, variant):
+    """The modules `mitsuba` (set to `variant`) and `numpy`; exits with what to do when either is
+    missing or when our binary `vcm` is not built."""
+    try:
+        import mitsuba as mi
+        import numpy as np
+    except ImportError as e:
+        sys.exit(f"needs mitsuba and numpy ({e}); run it with target/peer-bench/venv/bin/python")
+    if not os.path.exists(vcm):
+        sys.exit(f"{vcm} not found: run `cargo build --release` first")
+    mi.set_variant(variant)
+    return mi, np
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("scene", help="a Mitsuba 3 XML file")
@@ -77,14 +91,7 @@ def main():
                         help="render Mitsuba with this sampler type instead of the file's "
                              "(independent, stratified, multijitter, orthogonal, ldsampler)")
     args = parser.parse_args()
-    try:
-        import mitsuba as mi
-        import numpy as np
-    except ImportError as e:
-        sys.exit(f"needs mitsuba and numpy ({e}); run it with target/peer-bench/venv/bin/python")
-    if not os.path.exists(args.vcm):
-        sys.exit(f"{args.vcm} not found: run `cargo build --release` first")
-    mi.set_variant(args.variant)
+    mi, np = import_mitsuba(args.vcm, args.variant)
     width, height = (int(v) for v in (args.resolution.split("x") * 2)[:2])
     scene_file = args.scene
     if args.mitsuba_sampler:
