@@ -57,11 +57,12 @@ fn reach_of(radius: f32) -> usize {
     ((radius + 0.5).ceil() as usize).saturating_sub(1)
 }
 
-/// Buffers of [`spread_lattice`] and [`spread_camera_pass`], kept from iteration to iteration:
-/// allocated anew each time, the two image-sized buffers (12 bytes per value each) came fresh
-/// from the kernel every iteration, whose page faults and unmapping cost a two-thread `pt`
-/// render of Mitsuba's Cornell box about 3 % of its time (docs/performance.md, "Buffers kept
-/// across iterations"). Reusing them changes no value.
+/// Buffers of [`spread_lattice`] and [`spread_camera_pass`], which the path tracer keeps from
+/// iteration to iteration: allocated anew each time, the two image-sized buffers (12 bytes per
+/// value each) came fresh from the kernel every iteration, whose page faults and unmapping cost
+/// a two-thread `pt` render of Mitsuba's Cornell box about 3 % of its time (docs/performance.md,
+/// "Buffers kept across iterations"). Reusing them changes no value. (The VCM engine passes
+/// fresh ones, freed before its next light pass, so that they do not add to its peak memory.)
 #[derive(Clone, Debug, Default)]
 pub struct SpreadScratch {
     /// The values as flat float triples (the row pass's input, then the column pass's output).

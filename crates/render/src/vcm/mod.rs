@@ -480,8 +480,6 @@ struct Engine<S: SpectralMode> {
     merge_groups: Vec<MergeGroup>,
     /// The iteration's light-tracing splats, summed per pixel.
     splat_sums: SplatSums,
-    /// The camera samples' splatting buffers, kept across iterations.
-    spread: crate::splat_frame::SpreadScratch,
 }
 
 /// One chunk of light sub-paths: vertices, per-path ends (relative), splats.
@@ -512,7 +510,6 @@ impl<S: SpectralMode> Engine<S> {
             stats: IterationStats::default(),
             merge_groups: Vec::new(),
             splat_sums: SplatSums::default(),
-            spread: Default::default(),
         }
     }
 
@@ -641,7 +638,11 @@ impl<S: SpectralMode> Engine<S> {
                 &mut frame.pixels,
                 self.family_frames.as_mut(),
                 self.technique_frame.as_mut(),
-                &mut self.spread,
+                // Fresh buffers, freed before the next light pass: kept across iterations they
+                // would add 24 bytes per pixel to the peak the memory guard estimates, for no
+                // gain this machine resolves (docs/performance.md, "Buffers kept across
+                // iterations").
+                &mut Default::default(),
             );
         }
         let camera_pass = start.elapsed() - light_pass - grid_build;
@@ -794,7 +795,7 @@ impl<S: SpectralMode> Engine<S> {
             &mut frame.pixels,
             family_frames.as_deref_mut(),
             self.technique_frame.as_mut(),
-            &mut self.spread,
+            &mut Default::default(),
         );
         let camera_pass = start.elapsed() - light_pass;
         let splats = self.splat_sums.finish(
