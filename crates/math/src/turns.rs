@@ -62,19 +62,6 @@ pub fn sin_cos_turns(t: f32) -> (f32, f32) {
     (f32::from_bits(s ^ swap ^ sin_sign), f32::from_bits(c ^ swap ^ cos_sign))
 }
 
-/// `if x > y { if_greater } else { otherwise }` for non-negative, non-NaN `x` and `y`, computed
-/// on the bits (such floats order like their bit patterns) so that the compiler keeps it free of
-/// branches: for a comparison that is a coin flip, where a branch would be mispredicted half
-/// the time. (A `bool` condition turned into a mask was compiled back into a branch.)
-#[inline]
-pub fn select_greater(x: f32, y: f32, if_greater: f32, otherwise: f32) -> f32 {
-    // All ones when y's bits are below x's: the difference of two patterns in [0, 2³¹) cannot
-    // overflow.
-    let mask = ((y.to_bits() as i32).wrapping_sub(x.to_bits() as i32) >> 31) as u32;
-    let (g, o) = (if_greater.to_bits(), otherwise.to_bits());
-    f32::from_bits(o ^ ((g ^ o) & mask))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -114,20 +101,6 @@ mod tests {
             for d in [-1e-6f64, -1e-7, 0.0, 1e-7, 1e-6] {
                 let (es, ec) = max_errors(k as f64 / 8.0 + d, k as f64 / 8.0 + d, 1);
                 assert!(es < 1.2e-7 && ec < 1.2e-7, "t {}: {es:e} {ec:e}", k as f64 / 8.0 + d);
-            }
-        }
-    }
-
-    #[test]
-    fn select_greater_is_the_comparison() {
-        let values = [0.0f32, 1e-45, 1e-30, 0.25, 0.5, 1.0, 1.0 + f32::EPSILON, 3.0, 1e30, f32::MAX, f32::INFINITY];
-        for &x in &values {
-            for &y in &values {
-                let want = if x > y { -7.5f32 } else { 2.0 };
-                let got = select_greater(x, y, -7.5, 2.0);
-                assert_eq!(got.to_bits(), want.to_bits(), "{x} > {y}");
-                // The selected value's bits, signed zeros included.
-                assert_eq!(select_greater(x, y, -0.0, 0.0).to_bits(), if x > y { 0x8000_0000 } else { 0 });
             }
         }
     }

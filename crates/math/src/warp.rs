@@ -2,7 +2,6 @@
 //! inverse (`warp(inverse(x)) == x`). Densities on the sphere are per unit solid angle; densities
 //! on discs and triangles are per unit area.
 
-use crate::turns::select_greater;
 use crate::{INV_PI, PI, sin_cos_turns};
 use glam::{Vec2, Vec3};
 
@@ -85,6 +84,19 @@ pub fn concentric_disc(u: [f32; 2]) -> Vec2 {
     let turns = select_greater(a2, b2, 0.125 * t, 0.25 - 0.125 * t);
     let (sin_phi, cos_phi) = sin_cos_turns(turns);
     Vec2::new(r * cos_phi, r * sin_phi)
+}
+
+/// `if x > y { if_greater } else { otherwise }` for non-negative, non-NaN `x` and `y`, computed
+/// on the bits (such floats order like their bit patterns) so that the compiler keeps it free of
+/// branches: for a comparison that is a coin flip, where a branch would be mispredicted half
+/// the time. (A `bool` condition turned into a mask was compiled back into a branch.)
+#[inline]
+fn select_greater(x: f32, y: f32, if_greater: f32, otherwise: f32) -> f32 {
+    // All ones when y's bits are below x's: the difference of two patterns in [0, 2³¹) cannot
+    // overflow.
+    let mask = ((y.to_bits() as i32).wrapping_sub(x.to_bits() as i32) >> 31) as u32;
+    let (g, o) = (if_greater.to_bits(), otherwise.to_bits());
+    f32::from_bits(o ^ ((g ^ o) & mask))
 }
 
 /// Density of [`concentric_disc`]: `1/π` per unit area.
@@ -194,6 +206,20 @@ fn azimuth_fraction(d: Vec3) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn select_greater_is_the_comparison() {
+        let values = [0.0f32, 1e-45, 1e-30, 0.25, 0.5, 1.0, 1.0 + f32::EPSILON, 3.0, 1e30, f32::MAX, f32::INFINITY];
+        for &x in &values {
+            for &y in &values {
+                let want = if x > y { -7.5f32 } else { 2.0 };
+                let got = select_greater(x, y, -7.5, 2.0);
+                assert_eq!(got.to_bits(), want.to_bits(), "{x} > {y}");
+                // The selected value's bits, signed zeros included.
+                assert_eq!(select_greater(x, y, -0.0, 0.0).to_bits(), if x > y { 0x8000_0000 } else { 0 });
+            }
+        }
+    }
 
     fn grid() -> impl Iterator<Item = [f32; 2]> {
         (1..20).flat_map(|i| (1..20).map(move |j| [i as f32 / 20.0, j as f32 / 20.0]))

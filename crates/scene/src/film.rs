@@ -94,6 +94,28 @@ pub enum FilmSums {
     },
 }
 
+/// Calls `add(sum, square, pixel)` for every pixel in parallel (`square` is `None` when the
+/// film keeps no sums of squares: `squares` is empty) and combines the results with `combine`
+/// from `identity` (a sum or a maximum: the result does not depend on the split).
+fn add_per_pixel<T: Send, R: Send + Sync + Copy>(
+    sums: &mut [[T; 3]],
+    squares: &mut [[T; 3]],
+    pixels: &[Rgb],
+    identity: R,
+    combine: impl Fn(R, R) -> R + Sync + Send,
+    add: impl Fn(&mut [T; 3], Option<&mut [T; 3]>, &Rgb) -> R + Sync + Send,
+) -> R {
+    if squares.is_empty() {
+        sums.par_iter_mut().zip(pixels).map(|(sum, pixel)| add(sum, None, pixel)).reduce(|| identity, &combine)
+    } else {
+        sums.par_iter_mut()
+            .zip(squares.par_iter_mut())
+            .zip(pixels)
+            .map(|((sum, square), pixel)| add(sum, Some(square), pixel))
+            .reduce(|| identity, &combine)
+    }
+}
+
 impl FilmSums {
     fn zeros(pixels: usize, variance: bool, summation: Summation) -> Self {
         let squares = if variance { pixels } else { 0 };
@@ -260,62 +282,49 @@ impl Film {
         let mut rejected = rejected_samples;
         match &mut self.sums {
             FilmSums::Float { sums, squares } => {
-                let add = |sum: &mut [f64; 3], square: Option<&mut [f64; 3]>, pixel: &Rgb| {
-                    let value = pixel.to_array().map(f64::from);
-                    for c in 0..3 {
-                        sum[c] += value[c];
-                    }
-                    if let Some(square) = square {
+                add_per_pixel(
+                    sums,
+                    squares,
+                    &frame.pixels,
+                    (),
+                    |_, _| (),
+                    |sum, square, pixel| {
+                        let value = pixel.to_array().map(f64::from);
                         for c in 0..3 {
-                            square[c] += value[c] * value[c];
+                            sum[c] += value[c];
                         }
-                    }
-                };
-                // Without the sums of squares `squares` is empty and only the sums are added.
-                if squares.is_empty() {
-                    sums.par_iter_mut().zip(&frame.pixels).for_each(|(sum, pixel)| add(sum, None, pixel));
-                } else {
-                    sums.par_iter_mut()
-                        .zip(squares.par_iter_mut())
-                        .zip(&frame.pixels)
-                        .for_each(|((sum, square), pixel)| add(sum, Some(square), pixel));
-                }
+                        if let Some(square) = square {
+                            for c in 0..3 {
+                                square[c] += value[c] * value[c];
+                            }
+                        }
+                    },
+                );
             }
             FilmSums::Fixed { sums, squares, largest } => {
                 // Per pixel: (rejected, largest |v| added).
-                let add = |sum: &mut [i128; 3], square: Option<&mut [i128; 3]>, pixel: &Rgb| -> (u64, f32) {
-                    let value = pixel.to_array().map(f64::from);
-                    if !value.iter().all(|v| v.abs() < FIXED_LIMIT) {
-                        return (1, 0.0);
-                    }
-                    let mut most = 0.0f32;
-                    for c in 0..3 {
-                        // v·2⁶⁴ and v²·2⁴⁰ are exact in f64 for an f32 v; rounding them to
-                        // integers is the only rounding, and the additions are exact.
-                        sum[c] = sum[c].wrapping_add((value[c] * SUM_SCALE).round() as i128);
-                        most = most.max(value[c].abs() as f32);
-                    }
-                    if let Some(square) = square {
-                        for c in 0..3 {
-                            let s = (value[c] * value[c] * SQUARE_SCALE).round() as i128;
-                            square[c] = square[c].wrapping_add(s);
-                        }
-                    }
-                    (0, most)
-                };
                 let combine = |a: (u64, f32), b: (u64, f32)| (a.0 + b.0, a.1.max(b.1));
-                let (count, most) = if squares.is_empty() {
-                    sums.par_iter_mut()
-                        .zip(&frame.pixels)
-                        .map(|(sum, pixel)| add(sum, None, pixel))
-                        .reduce(|| (0, 0.0), combine)
-                } else {
-                    sums.par_iter_mut()
-                        .zip(squares.par_iter_mut())
-                        .zip(&frame.pixels)
-                        .map(|((sum, square), pixel)| add(sum, Some(square), pixel))
-                        .reduce(|| (0, 0.0), combine)
-                };
+                let (count, most) =
+                    add_per_pixel(sums, squares, &frame.pixels, (0, 0.0), combine, |sum, square, pixel| {
+                        let value = pixel.to_array().map(f64::from);
+                        if !value.iter().all(|v| v.abs() < FIXED_LIMIT) {
+                            return (1, 0.0);
+                        }
+                        let mut most = 0.0f32;
+                        for c in 0..3 {
+                            // v·2⁶⁴ and v²·2⁴⁰ are exact in f64 for an f32 v; rounding them to
+                            // integers is the only rounding, and the additions are exact.
+                            sum[c] = sum[c].wrapping_add((value[c] * SUM_SCALE).round() as i128);
+                            most = most.max(value[c].abs() as f32);
+                        }
+                        if let Some(square) = square {
+                            for c in 0..3 {
+                                let s = (value[c] * value[c] * SQUARE_SCALE).round() as i128;
+                                square[c] = square[c].wrapping_add(s);
+                            }
+                        }
+                        (0, most)
+                    });
                 rejected += count;
                 *largest = largest.max(most);
             }
