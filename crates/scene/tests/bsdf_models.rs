@@ -650,6 +650,33 @@ fn conductor_fresnel_rgb_is_the_scalar_function_per_channel() {
     }
 }
 
+/// The total reflectors that `fresnel_conductor_rgb` answers without the formula (`η = 0`,
+/// `k` = 0 or 1 per channel): the formula itself, through the scalar function, gives exactly
+/// 1 for them at every angle, so the shortcut changes no value. A shortcut taken for another
+/// index (here `k = 0.5`, `η = 0.01`) would fail the per-channel comparison.
+#[test]
+fn conductor_fresnel_of_total_reflectors_is_one() {
+    let mut rng = Rng::new(17, 3);
+    let mut cosines = vec![0.0f32, -0.0, 1e-45, 1e-30, 1e-7, 0.5, 1.0, -1.0, 1.5, f32::INFINITY, f32::NAN];
+    cosines.extend((0..100_000).map(|_| 2.0 * rng.uniform() - 1.0));
+    let ks = [Rgb::BLACK, Rgb::WHITE, Rgb::new(0.0, 1.0, 0.0), Rgb::new(1.0, 1.0, 0.0), Rgb::new(-0.0, 1.0, 1.0)];
+    for &cos in &cosines {
+        for k in ks {
+            for eta in [Rgb::BLACK, Rgb::splat(-0.0)] {
+                let scalar = [k.r, k.g, k.b].map(|k| fresnel_conductor(cos, 0.0, k));
+                assert_eq!(scalar, [1.0; 3], "cos {cos} k {k:?}");
+                assert_eq!(fresnel_conductor_rgb(cos, eta, k), Rgb::WHITE, "cos {cos} k {k:?}");
+            }
+        }
+        // Not total reflectors: the general formula, per channel.
+        for (eta, k) in [(Rgb::BLACK, Rgb::splat(0.5)), (Rgb::new(0.0, 0.0, 0.01), Rgb::WHITE)] {
+            let rgb = fresnel_conductor_rgb(cos, eta, k);
+            let scalar = [(eta.r, k.r), (eta.g, k.g), (eta.b, k.b)].map(|(e, k)| fresnel_conductor(cos, e, k));
+            assert_eq!([rgb.r, rgb.g, rgb.b].map(f32::to_bits), scalar.map(f32::to_bits), "cos {cos}");
+        }
+    }
+}
+
 #[test]
 fn diffuse_fresnel_reflectance_fit_matches_quadrature() {
     for eta in [1.0f32 / 1.5, 1.2, 1.5, 1.9] {

@@ -173,7 +173,16 @@ pub fn fresnel_conductor(cos_incident: f32, eta: f32, k: f32) -> f32 {
 
 /// [`fresnel_conductor`] per colour channel, bit for bit. The three channels are computed
 /// together: the compiler packs red and green into SSE2 registers and computes blue beside them.
+///
+/// Total reflectors skip the formula: `η = 0` with `k = 0` (our perfect mirror) or `k = 1`
+/// (Mitsuba's conductors without a material) in every channel, for which it gives exactly 1 at
+/// every angle (`conductor_fresnel_of_total_reflectors_is_one`). Mitsuba's default `conductor`
+/// is such a mirror; its two square roots and division in f64 per channel were 5 % of a `pt`
+/// render of its caustic box (docs/performance.md, "Conductor Fresnel").
 pub fn fresnel_conductor_rgb(cos_incident: f32, eta: Rgb, k: Rgb) -> Rgb {
+    if eta == Rgb::BLACK && [k.r, k.g, k.b].iter().all(|&v| v == 0.0 || v == 1.0) {
+        return Rgb::WHITE;
+    }
     let [r, g, b] = fresnel_conductor_lanes(cos_incident, [eta.r, eta.g, eta.b], [k.r, k.g, k.b]);
     Rgb::new(r, g, b)
 }
