@@ -67,6 +67,8 @@ const CHUNK: usize = 1 << 16;
 /// caller's records (64 bytes apart in the VCM engine): smaller than [`CHUNK`], so that the
 /// 2–6 chunks of a typical iteration's 10⁵–10⁶ points do not leave a thread idle.
 const LEAN_CHUNK: usize = 1 << 13;
+/// Points whose positions the lean build's keys pass reads before it hashes them (12 KiB).
+const KEY_BLOCK: usize = 1 << 10;
 /// log2 of the largest number of first-level partitions.
 const PARTITION_BITS: u32 = 8;
 /// Cell edge over `2r`: slightly more than one, so the enlarged query box spans at most two
@@ -419,9 +421,17 @@ impl HashGrid {
         let skipped = bucket_count as u32;
         self.keys.resize(n, 0);
         self.keys.par_chunks_mut(LEAN_CHUNK).enumerate().for_each(|(chunk, keys)| {
-            for (offset, key) in keys.iter_mut().enumerate() {
-                let p = position(chunk * LEAN_CHUNK + offset);
-                *key = if p.is_finite() { map.bucket_of(p) } else { skipped };
+            // The positions of a block first, then their keys: the loop that only reads keeps
+            // many record loads in flight, the hashing then runs on cached values.
+            let mut block = [Vec3::ZERO; KEY_BLOCK];
+            for (b, keys) in keys.chunks_mut(KEY_BLOCK).enumerate() {
+                let first = chunk * LEAN_CHUNK + b * KEY_BLOCK;
+                for (offset, p) in block[..keys.len()].iter_mut().enumerate() {
+                    *p = position(first + offset);
+                }
+                for (key, p) in keys.iter_mut().zip(&block) {
+                    *key = if p.is_finite() { map.bucket_of(*p) } else { skipped };
+                }
             }
         });
         // Counting sort: `starts[b]` counts bucket b, becomes its end by a running sum, and is
