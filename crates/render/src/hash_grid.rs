@@ -706,8 +706,8 @@ impl HashGrid {
                     continue;
                 };
                 let (start, end) = (start as usize, end as usize);
-                for item in data.get(start..end.min(start + PREFETCHED_PER_BUCKET)).unwrap_or(&[]) {
-                    crate::prefetch::prefetch(item);
+                if let Some(first) = data.get(start..end.min(start + PREFETCHED_PER_BUCKET)) {
+                    crate::prefetch::prefetch_lines(first);
                 }
             }
         }

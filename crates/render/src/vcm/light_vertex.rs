@@ -454,7 +454,7 @@ impl<'a, S: SpectralMode> LightPath<'a, S> {
     /// does not.)
     #[inline]
     pub fn prefetch(self) {
-        self.iter().for_each(crate::prefetch::prefetch);
+        self.iter().for_each(crate::prefetch::prefetch_lines);
     }
 }
 
