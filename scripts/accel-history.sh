@@ -16,15 +16,14 @@ set -euo pipefail
 base=$(git rev-parse --short "$1"); rounds=$2; shift 2
 root=$(cd "$(dirname "$0")/.." && pwd)
 cache=$root/target/accel-history/$base
-tree=$(mktemp -d)
-trap 'git -C "$root" worktree remove --force "$tree" 2>/dev/null || true; rm -rf "$tree"' EXIT
+tree=$(mktemp -d); out=$(mktemp)
+trap 'git -C "$root" worktree remove --force "$tree" 2>/dev/null || true; rm -rf "$tree" "$out"' EXIT
 if [ ! -x "$cache/release/vcm" ]; then
   git -C "$root" worktree add -q --detach "$tree" "$base"
   (cd "$tree" && CARGO_TARGET_DIR=$cache cargo build --release -q -p vcm)
 fi
 (cd "$root" && cargo build --release -q -p vcm)
 old=$cache/release/vcm; new=$root/target/release/vcm
-out=$(mktemp)
 for round in $(seq "$rounds"); do
   for scene in "$@"; do
     for build in old new; do
@@ -49,4 +48,3 @@ c0, c1, s0, s1 = med("old", 2), med("new", 2), med("old", 3), med("new", 3)
 print(f"{sys.argv[2]:<24} closest {c0:.2f} -> {c1:.2f} ({c1 / c0:.2f}x)   shadow {s0:.2f} -> {s1:.2f} ({s1 / s0:.2f}x)")
 PY
 done
-rm -f "$out"

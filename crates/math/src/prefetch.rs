@@ -33,18 +33,8 @@
 /// A hint only: it changes no value the program computes, whether or not the processor acts
 /// on it. A no-op on targets other than x86-64.
 #[inline(always)]
-#[allow(unsafe_code)]
 pub fn prefetch<T>(item: &T) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: `_mm_prefetch` is unsafe only because it takes a raw pointer and needs SSE. The
-    // pointer comes from a live reference, so it points into valid memory (a prefetch would not
-    // fault even otherwise: it never dereferences architecturally), and SSE is part of the
-    // x86-64 baseline that every x86-64 build of this crate targets.
-    unsafe {
-        core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>((item as *const T).cast::<i8>());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = item;
+    hint((item as *const T).cast::<i8>());
 }
 
 /// [`prefetch`] of every cache line that `item` spans: its first byte's line and, for an item
@@ -53,28 +43,30 @@ pub fn prefetch<T>(item: &T) {
 /// line alone leaves the fields in the second to miss (docs/performance.md, "Both lines of a
 /// light vertex").
 #[inline(always)]
-#[allow(unsafe_code)]
 pub fn prefetch_lines<T: ?Sized>(item: &T) {
+    let first = (item as *const T).cast::<i8>();
+    let size = std::mem::size_of_val(item);
+    // Offsets into the item: 0, then the start of each following line while it is inside.
+    let mut offset = 0;
+    while offset < size {
+        hint(first.wrapping_add(offset));
+        offset = (first as usize + offset) / 64 * 64 + 64 - first as usize;
+    }
+}
+
+/// The prefetch instruction for the line holding `address`, an address inside a live item or
+/// at its start (`wrapping_add` forms it without dereferencing anything).
+#[inline(always)]
+#[allow(unsafe_code)]
+fn hint(address: *const i8) {
     #[cfg(target_arch = "x86_64")]
-    {
-        let first = (item as *const T).cast::<i8>();
-        let size = std::mem::size_of_val(item);
-        if size == 0 {
-            return;
-        }
-        let offset = first as usize % 64;
-        let mut line = 0;
-        while line < offset + size {
-            // SAFETY: as in `prefetch`; `wrapping_add` forms the address without dereferencing
-            // it, and it stays within the item (`line − offset < size`) or at its start.
-            unsafe {
-                core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(
-                    first.wrapping_add(line.saturating_sub(offset)),
-                );
-            }
-            line += 64;
-        }
+    // SAFETY: `_mm_prefetch` is unsafe only because it takes a raw pointer and needs SSE. The
+    // pointer comes from a live reference, so it points into valid memory (a prefetch would not
+    // fault even otherwise: it never dereferences architecturally), and SSE is part of the
+    // x86-64 baseline that every x86-64 build of this crate targets.
+    unsafe {
+        core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(address);
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = item;
+    let _ = address;
 }

@@ -64,8 +64,8 @@ use rayon::prelude::*;
 /// Number of points per chunk in the parallel passes over the input.
 const CHUNK: usize = 1 << 16;
 /// Points per chunk in the lean build's parallel passes, which read each point from the
-/// caller's records (64 bytes apart in the VCM engine): smaller than [`CHUNK`], so that the
-/// 2–6 chunks of a typical iteration's 10⁵–10⁶ points do not leave a thread idle.
+/// caller's records (64 bytes apart in the VCM engine): smaller than [`CHUNK`], of which a
+/// typical iteration's 10⁵–10⁶ points make only 2–16, too few to keep every thread busy.
 const LEAN_CHUNK: usize = 1 << 13;
 /// Points whose positions the lean build's keys pass reads before it hashes them (12 KiB).
 const KEY_BLOCK: usize = 1 << 10;
