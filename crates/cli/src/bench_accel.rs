@@ -10,10 +10,14 @@
 //! `binary-bvh` feature (`cargo build --release --features binary-bvh`), the same counts for the
 //! previous binary tree and an interleaved A/B timing of both trees on the same rays in this
 //! process, one thread (a rough indication on a loaded machine; the counts are exact).
+//!
+//! On a processor with AVX2 or AVX-512, a last line times the scene's nearest-hit query compiled
+//! for that instruction set against the baseline x86-64 copy (`math::isa`), interleaved on one
+//! thread.
 
 use std::time::{Duration, Instant};
 
-use math::{Aabb, RAY_EPSILON, Ray, Rng, Vec2, Vec3, warp};
+use math::{Aabb, Isa, RAY_EPSILON, Ray, Rng, Vec2, Vec3, warp};
 use rayon::prelude::*;
 use scene::Scene;
 use scene::accel::{Bvh, TraversalCounts};
@@ -78,13 +82,51 @@ pub fn run(scene: &Scene, threads: usize) {
     );
     let stats = bvh.stats();
     println!(
-        "  8-wide BVH: {} nodes ({:.2} children each), depth {}; per ray: {wide}",
+        "  8-wide BVH: {} nodes ({:.2} children each), depth {}; per ray: {wide}; queries compiled for {}",
         stats.wide_nodes,
         (stats.wide_nodes - 1 + stats.leaves) as f64 / stats.wide_nodes as f64,
-        stats.wide_max_depth
+        stats.wide_max_depth,
+        math::Isa::active().name()
     );
+    isa_comparison(scene, &rays);
     #[cfg(feature = "binary-bvh")]
     binary_comparison(scene, &bounds, &bvh, &rays);
+}
+
+/// Rays per round of [`isa_comparison`].
+const ISA_RAYS: usize = 1 << 19;
+
+/// An interleaved A/B timing on this thread of the scene's nearest-hit query
+/// ([`Scene::intersect_at`]) compiled for the active instruction set ([`Isa::active`]) and for
+/// baseline x86-64 (`math::isa`), on the same rays; nothing when the active set is the
+/// baseline. Wall time: the thread's CPU time from `schedstat` advanced in 4 ms steps on the
+/// machine this was written on, too coarse for rounds of 10–150 ms.
+fn isa_comparison(scene: &Scene, rays: &Rays) {
+    let wide = Isa::active();
+    if wide == Isa::Baseline {
+        return;
+    }
+    const ROUNDS: usize = 6;
+    let closest = &rays.closest[..ISA_RAYS.min(rays.closest.len())];
+    let mut times = [Duration::ZERO; 2];
+    let mut checks = [0usize; 2];
+    for _ in 0..ROUNDS {
+        for (set, isa) in [wide, Isa::Baseline].into_iter().enumerate() {
+            let start = Instant::now();
+            checks[set] = closest.iter().filter(|r| scene.intersect_at(r, isa).is_some()).count();
+            times[set] += start.elapsed();
+        }
+    }
+    assert_eq!(checks[0], checks[1], "the instruction sets' queries disagree on the number of hits");
+    let rate = |t: Duration| (closest.len() * ROUNDS) as f64 / t.as_secs_f64() / 1e6;
+    println!(
+        "  closest hits compiled for {} against baseline x86-64, A/B on 1 thread (wall time), {ROUNDS} interleaved \
+         rounds: {:.2} vs {:.2} Mrays/s = {:.3}x",
+        wide.name(),
+        rate(times[0]),
+        rate(times[1]),
+        times[1].as_secs_f64() / times[0].as_secs_f64(),
+    );
 }
 
 /// Nearest hit on world primitive `i` (what the scene's query does without alpha masks).

@@ -449,6 +449,12 @@ fn run_scenes() {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // The instruction-set limit is read where the queries first run; a value it does not know
+    // is an error here rather than silently the default.
+    if let Err(error) = math::Isa::limit_from_env() {
+        eprintln!("error: {error}");
+        return ExitCode::from(2);
+    }
     let outcome = match cli.command {
         Command::Render(args) => run_render(args).map(|()| ExitCode::SUCCESS),
         Command::Scenes => {

@@ -44,6 +44,19 @@ fn scenes_lists_the_builtins() {
     }
 }
 
+/// `VCM_ISA` (the queries' instruction-set limit) with a value it does not know is an error
+/// that names the accepted values; a known value renders.
+#[test]
+fn unknown_instruction_set_limit_fails_clearly() {
+    let run = |value: &str| {
+        Command::new(env!("CARGO_BIN_EXE_vcm")).env("VCM_ISA", value).arg("scenes").output().expect("vcm runs")
+    };
+    let output = run("sse9");
+    assert!(!output.status.success());
+    assert!(stderr(&output).contains("VCM_ISA=\"sse9\": expected baseline, avx2 or avx512"), "{}", stderr(&output));
+    assert!(run("baseline").status.success());
+}
+
 fn assert_fails(args: &[&str], expected: &[&str]) {
     let output = vcm(args);
     assert!(!output.status.success(), "{args:?} should fail");

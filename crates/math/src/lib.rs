@@ -7,6 +7,7 @@
 pub mod bounds;
 pub mod distribution;
 pub mod frame;
+pub mod isa;
 pub mod octahedral;
 pub mod pdf;
 pub mod prefetch;
@@ -21,6 +22,7 @@ pub use bounds::Aabb;
 pub use distribution::{AliasRows, AliasTable, Distribution1D, Distribution2D};
 pub use frame::Frame;
 pub use glam::{Vec2, Vec3, Vec3A};
+pub use isa::Isa;
 pub use pdf::{PdfA, PdfW};
 pub use prefetch::prefetch;
 pub use ray::Ray;

@@ -1,4 +1,5 @@
-//! The software prefetch hint: the workspace's only `unsafe` code.
+//! The software prefetch hint: one of the workspace's two `unsafe` exceptions (the other is the
+//! instruction-set dispatch, [`crate::isa`]).
 //!
 //! Some reads miss the cache at addresses that nothing before them lets the hardware
 //! prefetcher predict, and an ordinary load issued early only moves the stall (a load that

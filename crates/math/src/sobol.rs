@@ -16,6 +16,8 @@
 //! equal, which samplers that reuse those bits, e.g. an alias table's slot fraction, turn into
 //! equal decisions for all of a pixel's samples).
 
+use crate::isa::Kernel;
+
 /// Dimensions available.
 pub const DIMENSIONS: usize = 8;
 
@@ -104,7 +106,7 @@ fn raw_reversed(index: u32, dimension: usize) -> u32 {
 /// A bijection of 32-bit numbers in which output bit `k` is input bit `k` flipped by a function
 /// of the bits below it and of `key`: products with even constants, the key added and a product
 /// with an odd number made from the key (the constants of Vegdahl's hash, 2021).
-#[inline]
+#[inline(always)]
 fn permute_upwards(mut x: u32, key: u32) -> u32 {
     x ^= x.wrapping_mul(0x3d20_adea);
     x = x.wrapping_add(key);
@@ -115,7 +117,7 @@ fn permute_upwards(mut x: u32, key: u32) -> u32 {
 }
 
 /// A 64-bit finaliser (splitmix64's).
-#[inline]
+#[inline(always)]
 fn hash64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
@@ -163,8 +165,32 @@ static BY_BIT: [[u32; DIMENSIONS]; 32] = {
 /// is one row XOR per set bit of the index for all dimensions, and the scrambles are written as
 /// lane-wise array operations, which the compiler vectorises (callgrind on Mitsuba's Cornell box
 /// `pt`: about 515 instructions per sample through [`sample`], docs/performance.md).
+///
+/// Runs through [`crate::isa::dispatch`]: with AVX2 the eight dimensions are one vector, with
+/// AVX-512 the bit reversal and the conversion to float are single instructions as well
+/// (docs/bvh.md, "Instruction sets chosen at run time", measures it).
 #[inline]
 pub fn point(index: u32, key: u64) -> [f32; DIMENSIONS] {
+    crate::isa::dispatch(Point { index, key })
+}
+
+/// [`point`] as a kernel of [`crate::isa::dispatch`].
+struct Point {
+    index: u32,
+    key: u64,
+}
+
+impl Kernel for Point {
+    type Output = [f32; DIMENSIONS];
+    #[inline(always)]
+    fn run(self) -> [f32; DIMENSIONS] {
+        point_in_place(self.index, self.key)
+    }
+}
+
+/// The body of [`point`], inlined into each instruction set's copy.
+#[inline(always)]
+fn point_in_place(index: u32, key: u64) -> [f32; DIMENSIONS] {
     let mut raw = [0u32; DIMENSIONS];
     let mut i = index;
     while i != 0 {
@@ -260,6 +286,25 @@ mod tests {
                 for (j, v) in p.iter().enumerate() {
                     assert_eq!(v.to_bits(), sample(index, j, key).to_bits(), "index {index}, dimension {j}");
                 }
+            }
+        }
+    }
+
+    /// Each instruction set's copy of [`point`] (`crate::isa`) gives its samples bit for bit
+    /// (on a processor without a set, the copy falls back to a narrower one).
+    #[test]
+    fn point_copies_agree() {
+        use crate::isa::{Isa, dispatch_at};
+        let mut rng = crate::Rng::for_stream(5, 0, 0);
+        for i in 0..20_000u32 {
+            let (index, key) = if i < 100 {
+                (i, 3)
+            } else {
+                (rng.next_u32(), u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32()))
+            };
+            let expected: [u32; DIMENSIONS] = std::array::from_fn(|j| sample(index, j, key).to_bits());
+            for isa in [Isa::Baseline, Isa::Avx2, Isa::Avx512] {
+                assert_eq!(dispatch_at(isa, Point { index, key }).map(f32::to_bits), expected, "{isa:?} {index} {key}");
             }
         }
     }

@@ -6,6 +6,7 @@
 //! (ids `0..primitives.len()`) and the instances (the ids after them), and an instance leaf
 //! traces the object-space ray through its object's own BVH (see [`crate::instance`]).
 
+use math::isa::{Isa, Kernel};
 use math::{Aabb, Distribution1D, RAY_EPSILON, Ray, Vec2, Vec3};
 
 use crate::accel::Bvh;
@@ -292,8 +293,22 @@ impl Scene {
 
     /// Nearest intersection of `ray` (any distance > 0). Hits that a primitive's alpha mask
     /// rejects are skipped (see [`crate::alpha`]).
+    ///
+    /// Runs compiled for the widest instruction set the processor has ([`math::isa`]).
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
+        math::isa::dispatch(Intersect { scene: self, ray })
+    }
+
+    /// [`Scene::intersect`] compiled for the widest instruction set up to `limit` that the
+    /// processor has (for A/B measurements, `vcm bench --accel`; the answer is the same).
+    pub fn intersect_at(&self, ray: &Ray, limit: Isa) -> Option<SurfaceHit> {
+        math::isa::dispatch_at(limit, Intersect { scene: self, ray })
+    }
+
+    /// The body of [`Scene::intersect`], inlined into each instruction set's copy.
+    #[inline(always)]
+    fn intersect_here(&self, ray: &Ray) -> Option<SurfaceHit> {
         let world_primitives = self.primitives.len() as u32;
         // The object primitive of the nearest instance hit so far: the BVH calls the closure
         // with the nearest distance found so far and keeps only strictly nearer hits, so the
@@ -304,7 +319,7 @@ impl Scene {
             let (index, distance) = embree.closest_hit(ray, f32::INFINITY)?;
             return Some(self.world_hit(ray, index, distance));
         }
-        let (index, distance) = self.bvh.closest_hit(ray, f32::INFINITY, |i, r, t_max| {
+        let (index, distance) = self.bvh.closest_hit_inline(ray, f32::INFINITY, |i, r, t_max| {
             if i < world_primitives {
                 let primitive = &self.primitives[i as usize];
                 return primitive.shape.intersect(r, t_max).filter(|&t| self.alpha_keeps(primitive, r, t));
@@ -592,6 +607,20 @@ impl LightSpectrum {
             (b.b, q.b)
         };
         if base > 0.0 { value / base } else { 0.0 }
+    }
+}
+
+/// [`Scene::intersect`] as a kernel of [`math::isa::dispatch`].
+struct Intersect<'a> {
+    scene: &'a Scene,
+    ray: &'a Ray,
+}
+
+impl Kernel for Intersect<'_> {
+    type Output = Option<SurfaceHit>;
+    #[inline(always)]
+    fn run(self) -> Option<SurfaceHit> {
+        self.scene.intersect_here(self.ray)
     }
 }
 

@@ -173,6 +173,22 @@ impl Bvh {
         self.closest_hit_with(ray, t_max, intersect, &mut ())
     }
 
+    /// [`Bvh::closest_hit`] inlined into its caller and compiled for the caller's instruction
+    /// set, for callers that run through [`math::isa::dispatch`] themselves (`Scene::intersect`,
+    /// so that the hit's surface data is compiled for the same set as the query).
+    #[inline(always)]
+    pub fn closest_hit_inline(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
+    ) -> Option<(u32, f32)> {
+        if self.nodes.is_empty() || t_max.is_nan() || t_max <= 0.0 {
+            return None;
+        }
+        self.closest_hit_octants(ray, t_max, intersect, &mut ())
+    }
+
     /// [`Bvh::closest_hit`] that also adds the work it did to `counts`.
     pub fn closest_hit_counted(
         &self,

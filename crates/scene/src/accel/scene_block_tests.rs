@@ -6,7 +6,7 @@
 //! bit for bit, primitive, material; the smallest id of equally near ones) and the any-hit answer.
 
 use glam::Affine3A;
-use math::{RAY_EPSILON, Ray, Rng, Vec3};
+use math::{Isa, RAY_EPSILON, Ray, Rng, Vec3};
 use spectrum::Rgb;
 
 use super::tests::{random_direction, random_soup, random_vec};
@@ -141,4 +141,27 @@ fn scene_queries_with_blocks_match_brute_force() {
     }
     assert!(hits > 1000 && blocked > 500, "{hits} hits, {blocked} blocked");
     assert!(kinds.iter().all(|&k| k > 20), "hits by plain, masked or fibre triangle, analytic, instance: {kinds:?}");
+}
+
+/// Every instruction set's copy of [`Scene::intersect`] (`math::isa`) returns the baseline
+/// copy's hit bit for bit (all fields, through their `Debug` text, which tells every distinct
+/// float apart) on the mixed scene; where the processor lacks a set, its copy falls back to a
+/// narrower one, so the comparison still runs.
+#[test]
+fn scene_intersect_is_the_same_with_every_instruction_set() {
+    let mut rng = Rng::for_stream(32, 0, 0);
+    let scene = mixed_scene(&mut rng);
+    let mut hits = 0;
+    for i in 0..4000 {
+        let direction = if i % 7 == 0 { [Vec3::X, -Vec3::Y, Vec3::Z][i % 3] } else { random_direction(&mut rng) };
+        let ray = Ray::new(random_vec(&mut rng, 14.0), direction);
+        let baseline = format!("{:?}", scene.intersect_at(&ray, Isa::Baseline));
+        for isa in [Isa::Avx2, Isa::Avx512] {
+            assert_eq!(format!("{:?}", scene.intersect_at(&ray, isa)), baseline, "{ray:?} with {isa:?}");
+        }
+        assert_eq!(format!("{:?}", scene.intersect(&ray)), baseline, "{ray:?}");
+        hits += baseline.starts_with("Some") as usize;
+    }
+    assert!(hits > 1000, "{hits} hits");
+    eprintln!("instruction sets compared: baseline against {}", Isa::detected().name());
 }
