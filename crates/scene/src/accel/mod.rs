@@ -183,9 +183,6 @@ impl Bvh {
         t_max: f32,
         intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
     ) -> Option<(u32, f32)> {
-        if self.nodes.is_empty() || t_max.is_nan() || t_max <= 0.0 {
-            return None;
-        }
         self.closest_hit_octants(ray, t_max, intersect, &mut ())
     }
 

@@ -173,14 +173,12 @@ impl Bvh {
         intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
         tally: &mut T,
     ) -> Option<(u32, f32)> {
-        if self.nodes.is_empty() || t_max.is_nan() || t_max <= 0.0 {
-            return None;
-        }
         math::isa::dispatch(ClosestHit { bvh: self, ray, t_max, intersect, tally })
     }
 
-    /// [`Bvh::closest_hit`] for a tree with nodes and `t_max > 0`: the copy for the ray's octant.
-    /// Inlined into each instruction set's copy of the query ([`math::isa`]).
+    /// [`Bvh::closest_hit`] without a dispatch: nothing for an empty tree or `t_max` not
+    /// positive, else the copy for the ray's octant. Inlined into each instruction set's copy
+    /// of the query ([`math::isa`]).
     #[inline(always)]
     pub(super) fn closest_hit_octants<T: Tally>(
         &self,
@@ -189,6 +187,9 @@ impl Bvh {
         intersect: impl FnMut(u32, &Ray, f32) -> Option<f32>,
         tally: &mut T,
     ) -> Option<(u32, f32)> {
+        if self.nodes.is_empty() || t_max.is_nan() || t_max <= 0.0 {
+            return None;
+        }
         match octant(ray) {
             0 => self.closest_hit_in::<0, T>(ray, t_max, intersect, tally),
             1 => self.closest_hit_in::<1, T>(ray, t_max, intersect, tally),
