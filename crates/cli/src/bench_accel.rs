@@ -86,7 +86,7 @@ pub fn run(scene: &Scene, threads: usize) {
         stats.wide_nodes,
         (stats.wide_nodes - 1 + stats.leaves) as f64 / stats.wide_nodes as f64,
         stats.wide_max_depth,
-        math::Isa::active().name()
+        Isa::active().name()
     );
     isa_comparison(scene, &rays);
     #[cfg(feature = "binary-bvh")]

@@ -3,10 +3,10 @@
 //!
 //! The binary is built for baseline x86-64 (SSE2), so that it runs on every x86-64 processor.
 //! A few self-contained hot functions run faster when compiled for a wider instruction set:
-//! the BVH queries (`scene::accel`: slab tests and triangle blocks on glam's `Vec4`, which
-//! AVX encodes without register copies, and the sorting network on 64-bit keys, for which
-//! AVX-512 has an unsigned minimum and maximum) and the Sobol point (`crate::sobol::point`:
-//! 32-bit lanes, bit reversal and integer-to-float conversion). [`dispatch`] runs such a
+//! the nearest-hit query (`scene::Scene::intersect`: slab tests and triangle blocks on glam's
+//! `Vec4`, which AVX encodes without register copies; the measured gain is AVX-512's, AVX2's is
+//! about nothing there) and the Sobol point (`crate::sobol::point`: its eight 32-bit lanes are
+//! one AVX2 register, and AVX-512 multiplies its 64-bit hashes in vector registers too). [`dispatch`] runs such a
 //! function, written as a [`Kernel`], through one of three copies — baseline, x86-64-v3 (AVX2)
 //! and x86-64-v4 (AVX-512) — the widest that the processor supports ([`Isa::active`]).
 //!
@@ -14,13 +14,13 @@
 //! contracts a multiplication and an addition into a fused multiply-add, nor uses approximate
 //! reciprocals, whatever the target features; `cfg(target_feature)` code in dependencies (glam)
 //! is chosen when the crate is compiled, the same for every copy. Tests compare each available
-//! copy with the baseline one (`isa_copies_agree` in `scene`'s BVH tests, `point_copies_agree`
-//! in `sobol`), and `scripts/image-identity.sh` renders the same images with `VCM_ISA=baseline`.
+//! copy with the baseline one (`scene_intersect_is_the_same_with_every_instruction_set` in
+//! `scene`'s BVH tests, `point_copies_agree` in `sobol`), and `scripts/image-identity.sh` renders the same images with `VCM_ISA=baseline`.
 //!
 //! Why `unsafe`: calling a function compiled with `#[target_feature]` from code compiled
 //! without it is `unsafe` in Rust, because running it on a processor without those features
-//! is undefined behaviour. [`dispatch_at`] calls a copy only after [`Isa::detected`] has
-//! confirmed every feature it is compiled with. What it gains is measured in docs/bvh.md
+//! is undefined behaviour. A copy runs only for a set at most [`Isa::detected`], which has
+//! confirmed every feature the copy is compiled with. What it gains is measured in docs/bvh.md
 //! ("Instruction sets chosen at run time"), which is what this exception rests on; `.ci/run`
 //! checks that no other file than this one and `prefetch.rs` allows `unsafe_code`.
 //!
@@ -173,30 +173,39 @@ pub trait Kernel {
     fn run(self) -> Self::Output;
 }
 
-/// Runs `kernel` compiled for the active instruction set ([`Isa::active`]).
+/// Runs `kernel` compiled for the active instruction set ([`Isa::active`]): one cached load
+/// per call.
 #[inline(always)]
 pub fn dispatch<K: Kernel>(kernel: K) -> K::Output {
-    dispatch_at(Isa::active(), kernel)
+    run_supported(Isa::active(), kernel)
 }
 
 /// Runs `kernel` compiled for the widest instruction set up to `limit` that this processor
-/// supports (tests compare the copies with it).
+/// supports (tests and A/B measurements compare the copies with it).
+#[inline(always)]
+pub fn dispatch_at<K: Kernel>(limit: Isa, kernel: K) -> K::Output {
+    run_supported(limit.min(Isa::detected()), kernel)
+}
+
+/// Runs `kernel`'s copy for `isa`, which the caller guarantees to be at most
+/// [`Isa::detected`]: [`Isa::active`] is (only `min(limit, detected)` is ever cached), and
+/// [`dispatch_at`] takes that minimum itself.
 #[inline(always)]
 #[allow(unsafe_code)]
-pub fn dispatch_at<K: Kernel>(limit: Isa, kernel: K) -> K::Output {
+fn run_supported<K: Kernel>(isa: Isa, kernel: K) -> K::Output {
     #[cfg(target_arch = "x86_64")]
-    match limit.min(Isa::detected()) {
-        // SAFETY: `Isa::detected` is `Avx512` only when `has_v4` found every feature that
-        // `run_v4` is compiled with on this processor.
+    match isa {
+        // SAFETY: `isa ≤ Isa::detected()`, which is `Avx512` only when `has_v4` found every
+        // feature that `run_v4` is compiled with on this processor.
         Isa::Avx512 => unsafe { run_v4(kernel) },
-        // SAFETY: `Isa::detected` is at least `Avx2` only when `has_v3` found every feature of
-        // `run_v3` (`has_v4` includes `has_v3`).
+        // SAFETY: `isa ≤ Isa::detected()`, which is at least `Avx2` only when `has_v3` found
+        // every feature of `run_v3` (`has_v4` includes `has_v3`).
         Isa::Avx2 => unsafe { run_v3(kernel) },
         Isa::Baseline => kernel.run(),
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let _ = limit;
+        let _ = isa;
         kernel.run()
     }
 }

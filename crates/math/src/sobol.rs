@@ -167,8 +167,9 @@ static BY_BIT: [[u32; DIMENSIONS]; 32] = {
 /// `pt`: about 515 instructions per sample through [`sample`], docs/performance.md).
 ///
 /// Runs through [`crate::isa::dispatch`]: with AVX2 the eight dimensions are one vector, with
-/// AVX-512 the bit reversal and the conversion to float are single instructions as well
-/// (docs/bvh.md, "Instruction sets chosen at run time", measures it).
+/// AVX-512 the 64-bit hashes of the dimension keys are vector multiplications as well (about 50
+/// instructions for the whole point; docs/bvh.md, "Instruction sets chosen at run time",
+/// measures it).
 #[inline]
 pub fn point(index: u32, key: u64) -> [f32; DIMENSIONS] {
     crate::isa::dispatch(Point { index, key })
