@@ -149,6 +149,11 @@ pub struct Scene {
     light_tree: std::sync::OnceLock<LightTree>,
     /// By material index: what hits need to know of the material ([`Scene::material_flags`]).
     flags: Vec<MaterialFlags>,
+    /// By world primitive: its [`Primitive::attributes`], copied into an array of its own so
+    /// that a hit can load it at once, beside the primitive's record, instead of after it (the
+    /// two loads were dependent cache misses; see `docs/bvh.md`). `primitives` is not changed
+    /// after construction.
+    world_attributes: Vec<u32>,
     /// Our BVH over the world primitives and instances (empty when [`Scene::embree`] answers
     /// the queries).
     bvh: Bvh,
@@ -192,6 +197,7 @@ impl Scene {
         let (center, radius) = if scene_box.is_empty() { (Vec3::ZERO, 1.0) } else { scene_box.bounding_sphere() };
         let background = lights.iter().position(Light::is_environment).map(|i| i as u32);
         let flags: Vec<MaterialFlags> = materials.iter().map(MaterialFlags::of).collect();
+        let world_attributes = primitives.iter().map(|p| p.attributes).collect();
         // Triangles that need nothing after the geometric test (no alpha mask, not a fibre, see
         // `alpha_keeps`) are tested by the BVH itself, four at a time.
         let plain_triangle = |id: u32| match primitives.get(id as usize) {
@@ -229,6 +235,7 @@ impl Scene {
             light_selection,
             light_tree: std::sync::OnceLock::new(),
             flags,
+            world_attributes,
             bvh,
             #[cfg(feature = "embree")]
             embree,
@@ -336,7 +343,8 @@ impl Scene {
         let instance = &self.instances[(index - world_primitives) as usize];
         let primitive = &self.objects[instance.object as usize].primitives[object_primitive as usize];
         let local_position = instance.to_object_ray(ray).at(distance);
-        let (normal, shading_normal, uv, attribute) = self.local_surface(primitive, local_position);
+        let attributes = self.attributes.get(primitive.attributes as usize);
+        let (normal, shading_normal, uv, attribute) = self.local_surface(primitive, attributes, local_position);
         let tangent = self.tangent(primitive, local_position, normal);
         Some(SurfaceHit {
             position,
@@ -357,7 +365,9 @@ impl Scene {
     fn world_hit(&self, ray: &Ray, index: u32, distance: f32) -> SurfaceHit {
         let position = ray.at(distance);
         let primitive = &self.primitives[index as usize];
-        let (normal, shading_normal, uv, attribute) = self.local_surface(primitive, position);
+        // Read from its own array, the attributes' index does not wait for `primitive`'s record.
+        let attributes = self.world_attributes.get(index as usize).and_then(|&a| self.attributes.get(a as usize));
+        let (normal, shading_normal, uv, attribute) = self.local_surface(primitive, attributes, position);
         let tangent = self.tangent(primitive, position, normal);
         SurfaceHit {
             position,
@@ -375,13 +385,19 @@ impl Scene {
 
     /// Geometric normal, shading normal, texture coordinates and mesh attribute value of
     /// `primitive` at `position`, the normals in the primitive's own space (world or object).
+    /// `attributes` are the primitive's own ([`Primitive::attributes`] looked up).
     #[inline(always)]
-    fn local_surface(&self, primitive: &Primitive, position: Vec3) -> (Vec3, Vec3, Vec2, Rgb) {
+    fn local_surface(
+        &self,
+        primitive: &Primitive,
+        attributes: Option<&SurfaceAttributes>,
+        position: Vec3,
+    ) -> (Vec3, Vec3, Vec2, Rgb) {
         let mut normal = primitive.shape.normal_at(position);
         let mut shading_normal = normal;
         let mut uv = Vec2::ZERO;
         let mut attribute_value = Rgb::BLACK;
-        match (&primitive.shape, self.attributes.get(primitive.attributes as usize)) {
+        match (&primitive.shape, attributes) {
             (Shape::Triangle(t), Some(SurfaceAttributes::Triangle { normals, uvs, attribute })) => {
                 let (b1, b2) = t.barycentrics(position);
                 let b0 = 1.0 - b1 - b2;
