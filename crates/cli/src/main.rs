@@ -6,6 +6,7 @@ mod bench;
 mod bench_accel;
 mod compare;
 mod conformance;
+mod huge_pages;
 mod merge;
 #[cfg(feature = "mpi")]
 mod mpi;
@@ -448,6 +449,12 @@ fn run_scenes() {
 }
 
 fn main() -> ExitCode {
+    // First of all, before the heap holds anything: start again with huge pages for the heap
+    // (`huge_pages.rs`; `VCM_HUGE_PAGES=0` turns it off).
+    if let Err(error) = huge_pages::restart_with_huge_pages() {
+        eprintln!("error: {error}");
+        return ExitCode::from(2);
+    }
     let cli = Cli::parse();
     // The instruction-set limit is read where the queries first run; a value it does not know
     // is an error here rather than silently the default.
