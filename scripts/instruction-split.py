@@ -58,10 +58,8 @@ LINE = re.compile(r"^\s*([\d,]+)\s+\([^)]*\)\s+([<*>])\s+(.*)$")
 
 def callgrind(command, out, reuse=False):
     if not reuse:
-        # One OpenMP thread for SmallVCM (our side takes `--threads 1`). `vcm` must not start
-        # itself again for huge pages (crates/cli/src/huge_pages.rs): callgrind would stop at
-        # the exec and count nothing of the render.
-        env = dict(os.environ, OMP_NUM_THREADS="1", VCM_HUGE_PAGES="0")
+        # One OpenMP thread for SmallVCM (our side takes `--threads 1`).
+        env = dict(os.environ, OMP_NUM_THREADS="1")
         subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}"] + command,
                        check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
     # Run from the output folder: from inside the repository, callgrind_annotate shortens the
