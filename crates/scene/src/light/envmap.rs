@@ -304,7 +304,10 @@ impl EnvMapLight {
 impl EnvMapData {
     /// The texels at the corners of lattice cell `(i0, j0)` (`j0 < H − 1`): upper left, upper
     /// right (column `i0 + 1`, wrapping to 0), lower left, lower right.
-    #[inline]
+    /// Always inlined: as a call (which `#[inline]` left it) the four texels came back through
+    /// memory and their first reads waited for the stores (matpreview `pt`, paired median 0.989
+    /// over 8 rounds against the call; docs/performance.md, "The cell's corners inlined").
+    #[inline(always)]
     fn corners(&self, i0: usize, j0: usize) -> [Texel; 4] {
         let i1 = if i0 + 1 == self.width { 0 } else { i0 + 1 };
         let (top, bottom) = (&self.texels[j0 * self.width..], &self.texels[(j0 + 1) * self.width..]);
