@@ -37,6 +37,9 @@ pub struct BenchArgs {
     /// Worker threads (default: all cores).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// How the threads share the work (as `vcm render --parallelism`).
+    #[arg(long, default_value = "auto", value_name = "auto|pixels|iterations", value_parser = crate::parse_parallelism)]
+    parallelism: render::Parallelism,
     /// Memory-efficient progressive VCM (tech report §6.2) for the VCM engine's algorithms.
     #[arg(long)]
     memory_efficient: bool,
@@ -106,6 +109,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             command.args(["-i", &args.iterations.to_string()]);
             command.args(["-r", &format!("{}x{}", args.resolution.0, args.resolution.1)]);
             command.args(["--threads", &args.threads.to_string()]);
+            command.args(["--parallelism", args.parallelism.name()]);
             if args.memory_efficient {
                 command.arg("--memory-efficient");
             }
@@ -132,6 +136,7 @@ fn child(args: &BenchArgs, source: &session::SceneSource, name: AlgorithmName) -
         algorithm,
         budget,
         threads: args.threads,
+        parallelism: args.parallelism,
         max_length: file_max_length.unwrap_or(RenderSettings::default().max_length),
         memory_efficient: args.memory_efficient,
         spectral: args.spectral,
@@ -143,8 +148,10 @@ fn child(args: &BenchArgs, source: &session::SceneSource, name: AlgorithmName) -
         ..RenderSettings::default()
     };
     // The guard's estimate, made where the session makes it: after loading, before rendering.
-    let guard_bytes = match settings(Budget::Iterations(1)).vcm_settings() {
-        Some(vcm) => session::guard::estimate_bytes(&scene, &vcm, 0),
+    let one = settings(Budget::Iterations(1));
+    let lanes = one.lanes(render::worker_threads(args.threads), scene.camera.pixel_count());
+    let guard_bytes = match one.vcm_settings() {
+        Some(vcm) => session::guard::estimate_bytes(&scene, &vcm, 0, lanes),
         None => {
             render::vcm::memory::resident_bytes().unwrap_or(0)
                 + render::vcm::memory::driver_bytes(scene.camera.pixel_count(), false)
@@ -166,10 +173,15 @@ fn child(args: &BenchArgs, source: &session::SceneSource, name: AlgorithmName) -
     };
     let phases = match result.vcm_stats {
         Some(s) => format!(
-            "  light {:.0}, grid {:.0}, camera {:.0}",
+            "  light {:.0}, grid {:.0}, camera {:.0}{}",
             s.phases.light_pass.as_secs_f64() * 1e3,
             s.phases.grid_build.as_secs_f64() * 1e3,
-            s.phases.camera_pass.as_secs_f64() * 1e3
+            s.phases.camera_pass.as_secs_f64() * 1e3,
+            if result.lanes > 1 {
+                format!(" ({} iterations at a time, one thread each)", result.lanes)
+            } else {
+                String::new()
+            }
         ),
         None => String::new(),
     };

@@ -206,6 +206,14 @@ struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N", default_value_t = 0)]
     threads: usize,
+    /// How the threads share the work: `pixels` (all threads on one iteration), `iterations`
+    /// (one iteration per thread, as many at a time as threads: no waiting between an
+    /// iteration's phases, one set of buffers per thread), or `auto`: iterations for lt, ppm,
+    /// bpm, bpt and vcm on images of at least 256x256 pixels when the memory guard allows
+    /// it, pixels otherwise. The image is the same bit for bit. See docs/performance.md,
+    /// "Iterations side by side".
+    #[arg(long, default_value = "auto", value_name = "auto|pixels|iterations", value_parser = parse_parallelism)]
+    parallelism: render::Parallelism,
     /// Memory the light vertices and merging grid may use, e.g. 8G or 512M [default: half of
     /// the physical memory]. A render that needs more switches to --memory-efficient, or stops
     /// with a message when that does not fit either.
@@ -378,6 +386,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         film: args.film,
         summation: args.sums,
         slice: args.slice,
+        parallelism: args.parallelism,
     };
     #[cfg(feature = "mpi")]
     return mpi::render(&request, &STOP, args.quiet);
@@ -417,6 +426,12 @@ fn parse_summation(text: &str) -> Result<Summation, String> {
 /// Parses `--slice`.
 fn parse_slice(text: &str) -> Result<SliceSpec, String> {
     SliceSpec::parse(text).map_err(|e| format!("{e:#}"))
+}
+
+/// Parses `--parallelism`.
+pub(crate) fn parse_parallelism(text: &str) -> Result<render::Parallelism, String> {
+    render::Parallelism::from_name(text)
+        .ok_or_else(|| format!("expected 'auto', 'pixels' or 'iterations', got '{text}'"))
 }
 
 /// Parses `--light-sampler`.

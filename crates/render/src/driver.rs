@@ -15,6 +15,7 @@ use scene::{Film, FrameBuffer, Scene, Summation};
 use spectrum::Rgb;
 
 use crate::eye_light;
+use crate::parallelism::Parallelism;
 use crate::path_tracer::PathTracer;
 use crate::primary_samples::{PathDims, PrimarySamples};
 use crate::progressive::{Progressive, run_budget};
@@ -116,6 +117,9 @@ pub struct RenderSettings {
     /// How the film adds iterations ([`Summation::Float`] by default; [`Summation::Fixed`]
     /// makes films of disjoint iteration ranges mergeable bit for bit).
     pub summation: Summation,
+    /// How the threads share the work: the pixels of one iteration, or whole iterations side by
+    /// side ([`Parallelism`]). The image is the same bit for bit either way.
+    pub parallelism: Parallelism,
 }
 
 impl Default for RenderSettings {
@@ -140,6 +144,7 @@ impl Default for RenderSettings {
             wavelength_groups: crate::vcm::wavelengths::DEFAULT_WAVELENGTH_GROUPS,
             variance: true,
             summation: Summation::Float,
+            parallelism: Parallelism::Auto,
         }
     }
 }
@@ -174,6 +179,8 @@ pub struct RenderOutput {
     pub elapsed: Duration,
     /// Threads actually used.
     pub threads: usize,
+    /// Iterations rendered at a time ([`RenderSettings::lanes`]; 1: all threads on one).
+    pub lanes: usize,
     /// Light vertices stored in the last iteration and bytes per vertex (VCM engine only).
     pub light_vertices: Option<(usize, usize)>,
     /// Statistics of the last iteration of the VCM engine.
@@ -274,6 +281,13 @@ impl<'a> Renderer<'a> {
     /// Renders the next iteration into [`Renderer::frame`]; returns the number of rejected
     /// (non-finite) samples.
     pub fn step(&mut self) -> u64 {
+        let pool = Arc::clone(&self.pool);
+        self.step_in(&pool)
+    }
+
+    /// [`Renderer::step`] on the threads of `pool` instead of the renderer's own: how
+    /// [`crate::progressive`] runs iterations side by side, one thread each.
+    pub(crate) fn step_in(&mut self, pool: &rayon::ThreadPool) -> u64 {
         let (scene, seed, iteration) = (self.scene, self.settings.seed, self.iteration);
         if self.frame.pixels.len() != scene.camera.pixel_count() {
             // The frame was taken ([`Renderer::take_frame`]) and not given back.
@@ -281,7 +295,7 @@ impl<'a> Renderer<'a> {
         }
         let (frame, spread) = (&mut self.frame, &mut self.spread);
         let integrator = &mut self.integrator;
-        let rejected = self.pool.install(|| match integrator {
+        let rejected = pool.install(|| match integrator {
             Integrator::Vcm(engine) => engine.run_iteration(scene, seed, iteration, frame),
             Integrator::PathTracing(tracer) => {
                 let spectral = tracer.spectral;
@@ -354,6 +368,16 @@ impl<'a> Renderer<'a> {
     /// Worker threads.
     pub fn threads(&self) -> usize {
         self.pool.current_num_threads()
+    }
+
+    /// The scene it renders.
+    pub fn scene(&self) -> &'a Scene {
+        self.scene
+    }
+
+    /// The settings the renderer was made with.
+    pub fn settings(&self) -> &RenderSettings {
+        &self.settings
     }
 
     /// The VCM engine, when the algorithm is one of its.

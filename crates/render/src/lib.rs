@@ -19,6 +19,7 @@ pub mod eye_light;
 pub mod fluorescent;
 pub mod hash_grid;
 mod null_walk;
+pub mod parallelism;
 pub mod path_tracer;
 pub mod primary_samples;
 pub(crate) use math::prefetch;
@@ -29,6 +30,7 @@ pub mod volumetric;
 pub mod wavelength_sequence;
 
 pub use driver::{Algorithm, RenderOutput, RenderSettings, render};
+pub use parallelism::{Parallelism, worker_threads};
 
 /// The balance heuristic weight of a sample drawn with density `own` when another technique
 /// would have drawn it with density `other` (both in the same measure).

@@ -6,6 +6,14 @@
 //!
 //! [`Progressive`] owns no scene (it borrows one), no budget, no stop flag and no files: the
 //! caller decides when to stop and what to write; [`run_budget`] is the usual caller.
+//!
+//! **Iterations side by side** ([`crate::Parallelism::Iterations`]). An iteration of the VCM
+//! engine has phases that wait for each other (light pass, grid, camera pass): at each boundary
+//! a thread that finishes early waits for the others, and some hand-overs are serial. With
+//! several lanes, [`Progressive::step_many`] renders that many consecutive iterations at once,
+//! each on a thread of its own with its own integrator state, and adds them to the film in
+//! index order: the film is the one of [`Progressive::step`] bit for bit, because an iteration
+//! depends only on the seed and its index and not on the number of threads that render it.
 
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -32,6 +40,13 @@ pub struct Progressive<'a> {
     /// Statistics of the last added iteration (VCM engine only).
     last_stats: Option<IterationStats>,
     elapsed: Duration,
+    /// Iterations rendered at a time by [`Progressive::step_many`] (1: one at a time).
+    lanes: usize,
+    /// Lane 0's one-thread pool (lane 0 is `renderer`, whose own pool has all the threads) and
+    /// the other lanes' renderers, each with a one-thread pool of its own; made at the first
+    /// [`Progressive::step_many`] of more than one iteration.
+    lane_pool: Option<rayon::ThreadPool>,
+    other_lanes: Vec<Renderer<'a>>,
 }
 
 /// One rendered iteration, not yet in the film: what [`Progressive::add_result`] adds. A
@@ -95,6 +110,7 @@ impl<'a> Progressive<'a> {
             }
             _ => None,
         };
+        let lanes = settings.lanes(renderer.threads(), scene.camera.pixel_count());
         Ok(Self {
             renderer,
             film,
@@ -104,7 +120,91 @@ impl<'a> Progressive<'a> {
             rejected_by_family: None,
             last_stats: None,
             elapsed: Duration::ZERO,
+            lanes,
+            lane_pool: None,
+            other_lanes: Vec::new(),
         })
+    }
+
+    /// Iterations [`Progressive::step_many`] renders at a time ([`RenderSettings::lanes`]).
+    pub fn lanes(&self) -> usize {
+        self.lanes
+    }
+
+    /// Renders the next `count` iterations and adds them to the film in order. With more than
+    /// one lane, up to [`Progressive::lanes`] of them at a time, one thread each; otherwise, or
+    /// for `count` 1, one at a time with all threads ([`Progressive::step`]). The film is the
+    /// same either way, bit for bit.
+    pub fn step_many(&mut self, count: usize) -> Result<(), String> {
+        let mut left = count;
+        while left > 0 {
+            let batch = left.min(self.lanes);
+            if batch <= 1 {
+                self.step()?;
+            } else {
+                self.step_lanes(batch)?;
+            }
+            left -= batch.max(1);
+        }
+        Ok(())
+    }
+
+    /// Renders iterations `next .. next + count` side by side, one per lane, and adds them.
+    fn step_lanes(&mut self, count: usize) -> Result<(), String> {
+        let start = Instant::now();
+        self.make_lanes(count)?;
+        let first = self.film.next_iteration();
+        let (families, techniques) = (self.family_films.is_some(), self.technique_images.is_some());
+        let Some(pool) = &self.lane_pool else { unreachable!("made by make_lanes") };
+        let (main, others) = (&mut self.renderer, &mut self.other_lanes[..count - 1]);
+        let results: Vec<IterationResult> = std::thread::scope(|scope| {
+            let handles: Vec<_> = others
+                .iter_mut()
+                .zip(first + 1..)
+                .map(|(lane, iteration)| {
+                    scope.spawn(move || {
+                        let pool = lane.pool();
+                        render_in(lane, &pool, iteration, families, techniques)
+                    })
+                })
+                .collect();
+            let mut results = vec![render_in(main, pool, first, families, techniques)];
+            for handle in handles {
+                results.push(handle.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)));
+            }
+            results
+        });
+        for (k, result) in results.into_iter().enumerate() {
+            self.add_result(&result)?;
+            match k {
+                0 => self.renderer.restore_frame(result.frame),
+                _ => self.other_lanes[k - 1].restore_frame(result.frame),
+            }
+        }
+        self.elapsed += start.elapsed();
+        Ok(())
+    }
+
+    /// Makes lane 0's pool and the renderers of lanes 1 .. `count` that do not exist yet.
+    fn make_lanes(&mut self, count: usize) -> Result<(), String> {
+        if self.lane_pool.is_none() {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .map_err(|e| format!("cannot start a worker thread: {e}"))?;
+            self.lane_pool = Some(pool);
+        }
+        while self.other_lanes.len() + 1 < count {
+            let settings = RenderSettings { threads: 1, ..self.renderer.settings().clone() };
+            let scene = self.renderer.scene();
+            let mut lane = Renderer::starting_at(scene, &settings, self.film.next_iteration())?;
+            if let Some(engine) = lane.vcm_engine_mut() {
+                engine.record_families(self.family_films.is_some());
+                engine.record_techniques(self.technique_images.as_ref().map(TechniqueImages::layout));
+            }
+            self.other_lanes.push(lane);
+        }
+        Ok(())
     }
 
     /// Renders the next iteration (index [`Progressive::next_iteration`]) and adds it to the film
@@ -130,24 +230,9 @@ impl<'a> Progressive<'a> {
     /// Renders global iteration `iteration` (any index: a function of the seed and the index
     /// only) without touching the film; [`Progressive::add_result`] adds it.
     pub fn render_iteration(&mut self, iteration: u64) -> IterationResult {
-        self.renderer.seek(iteration);
-        let rejected = self.renderer.step();
-        let frame = self.renderer.take_frame();
-        let engine = self.renderer.vcm_engine();
-        IterationResult {
-            iteration,
-            frame,
-            rejected,
-            stats: engine.map(|e| e.stats()),
-            family_values: match &self.family_films {
-                Some(_) => engine.and_then(|e| e.family_frames()).map(<[_]>::to_vec),
-                None => None,
-            },
-            technique_values: match &self.technique_images {
-                Some(_) => engine.and_then(|e| e.technique_frame()).map(|f| f.values.clone()),
-                None => None,
-            },
-        }
+        let pool = self.renderer.pool();
+        let (families, techniques) = (self.family_films.is_some(), self.technique_images.is_some());
+        render_in(&mut self.renderer, &pool, iteration, families, techniques)
     }
 
     /// Adds one rendered iteration to the film, the family films and the technique images, in
@@ -263,6 +348,7 @@ impl<'a> Progressive<'a> {
         let vcm_stats = self.last_stats.or_else(|| self.renderer.vcm_engine().map(|e| e.stats()));
         RenderOutput {
             threads: self.renderer.threads(),
+            lanes: self.lanes,
             film: self.film,
             elapsed: self.elapsed,
             light_vertices: vcm_stats.map(|s| (s.light_vertices, s.bytes_per_vertex)),
@@ -272,6 +358,33 @@ impl<'a> Progressive<'a> {
             technique_images: self.technique_images,
             rejected_by_family: self.rejected_by_family,
         }
+    }
+}
+
+/// Renders global iteration `iteration` with `renderer` on the threads of `pool`, taking its
+/// frame, and the family and technique values when they are recorded.
+fn render_in(
+    renderer: &mut Renderer,
+    pool: &rayon::ThreadPool,
+    iteration: u64,
+    families: bool,
+    techniques: bool,
+) -> IterationResult {
+    renderer.seek(iteration);
+    let rejected = renderer.step_in(pool);
+    let frame = renderer.take_frame();
+    let engine = renderer.vcm_engine();
+    IterationResult {
+        iteration,
+        frame,
+        rejected,
+        stats: engine.map(|e| e.stats()),
+        family_values: if families { engine.and_then(|e| e.family_frames()).map(<[_]>::to_vec) } else { None },
+        technique_values: if techniques {
+            engine.and_then(|e| e.technique_frame()).map(|f| f.values.clone())
+        } else {
+            None
+        },
     }
 }
 
@@ -292,6 +405,8 @@ pub fn run_budget(
     let mut last_checkpoint = Instant::now();
     let first_iteration = progressive.next_iteration();
     let every = checkpoint.as_ref().map(|(every, _)| *every);
+    // Wall-clock time of the last batch of iterations rendered side by side.
+    let mut last_batch: Option<Duration> = None;
     // The iterations run inside the renderer's pool ([`Progressive::in_pool`]), which they
     // leave only when a checkpoint is due (the saver need not be `Send`) or at the end.
     let interrupted = loop {
@@ -308,13 +423,27 @@ pub fn run_budget(
                 if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
                     return Ok(Pause::Stopped);
                 }
-                progressive.step()?;
+                // Side by side when lanes are on: the whole batch when the iteration budget
+                // allows it, or, under a time budget, while the last batch's time still fits.
+                let count = match settings.budget {
+                    Budget::Iterations(n) => (n - iteration).min(progressive.lanes() as u64) as usize,
+                    Budget::Time(limit) => match last_batch {
+                        Some(took) if start.elapsed() + took > limit => 1,
+                        _ => progressive.lanes(),
+                    },
+                };
+                let batch_start = Instant::now();
+                progressive.step_many(count)?;
+                if count > 1 {
+                    last_batch = Some(batch_start.elapsed());
+                }
+                let done = iteration + count as u64;
                 if let Some(bar) = &progress {
                     match settings.budget {
-                        Budget::Iterations(_) => bar.set_position(iteration + 1),
+                        Budget::Iterations(_) => bar.set_position(done),
                         Budget::Time(_) => {
                             bar.set_position(start.elapsed().as_millis() as u64);
-                            bar.set_message(format!("{} it", iteration + 1));
+                            bar.set_message(format!("{done} it"));
                         }
                     }
                 }

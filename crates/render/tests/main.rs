@@ -25,6 +25,7 @@ mod mesh_attributes_vcm;
 mod mis_oracle;
 mod mis_oracle_media;
 mod mitsuba_reference;
+mod parallelism;
 mod path_tracer;
 mod primary_samples;
 mod resume;

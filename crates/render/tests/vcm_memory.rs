@@ -63,20 +63,27 @@ fn child(spec: &str) {
             "memory-efficient" => settings.memory_efficient = true,
             "spectral" => settings.spectral = true,
             "no-variance" => settings.variance = false,
+            "pixels" => settings.parallelism = render::Parallelism::Pixels,
             other => panic!("unknown flag {other}"),
         }
     }
     let scene = cornell::build(cornell::BUILTIN_SCENES[1].mask, 512, 512).unwrap();
     let before = status_bytes("VmRSS:");
-    let estimate = match settings.vcm_settings() {
+    let pixels = scene.camera.pixel_count();
+    let one_lane = match settings.vcm_settings() {
         Some(vcm) => {
             let e = memory::estimate(&scene, &vcm, settings.seed);
             if settings.memory_efficient { e.memory_efficient_bytes } else { e.two_stage_bytes }
         }
-        None => memory::driver_bytes(scene.camera.pixel_count(), settings.variance),
+        None => memory::driver_bytes(pixels, settings.variance),
     };
+    // Iterations side by side (the VCM engine's default at this size) hold one set of buffers
+    // per lane.
+    let lanes = settings.lanes(settings.threads, pixels);
+    let estimate = memory::lanes_bytes(one_lane, pixels, settings.variance, lanes);
     let output = render::render(&scene, &settings).unwrap();
     assert_eq!(output.film.iterations(), 2);
+    assert_eq!(output.lanes, lanes);
     println!("memory {before} {estimate} {}", status_bytes("VmHWM:"));
 }
 
@@ -93,7 +100,9 @@ fn memory_estimate_is_within_15_percent_of_the_measured_peak() {
         "bpm",
         "bpt",
         "vcm",
+        "vcm,pixels",
         "vcm,no-variance",
+        "bpt,pixels",
         "vcm,memory-efficient",
         "vcm,memory-efficient,no-variance",
         "bpt,memory-efficient",

@@ -38,15 +38,19 @@ impl Live {
         Ok(Self { cell })
     }
 
-    /// Renders up to `iterations` more iterations, checking `stop` before each; returns the
-    /// number rendered (fewer only when `stop` was set).
+    /// Renders up to `iterations` more iterations, side by side when the render has lanes
+    /// ([`Progressive::step_many`]), checking `stop` before each batch; returns the number
+    /// rendered (fewer only when `stop` was set).
     pub fn step(&mut self, iterations: u64, stop: Option<&AtomicBool>) -> Result<u64> {
         self.cell.with_dependent_mut(|_, progressive| {
-            for done in 0..iterations {
+            let mut done = 0;
+            while done < iterations {
                 if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
                     return Ok(done);
                 }
-                progressive.step().map_err(anyhow::Error::msg)?;
+                let batch = (iterations - done).min(progressive.lanes() as u64);
+                progressive.step_many(batch as usize).map_err(anyhow::Error::msg)?;
+                done += batch;
             }
             Ok(iterations)
         })

@@ -221,6 +221,7 @@ impl Prepared {
             // variance image.
             variance: r.keep_variance || r.variance.is_some() || r.checkpoint.is_some(),
             summation: r.summation.unwrap_or_default(),
+            parallelism: r.parallelism,
             ..RenderSettings::default()
         };
         let slice = match r.slice {
@@ -243,10 +244,18 @@ impl Prepared {
         };
         if let Some(vcm_settings) = settings.vcm_settings()
             && !settings.memory_efficient
-            && let Guard::SwitchToMemoryEfficient(message) = guard::check(&scene, &vcm_settings, r.seed, r.max_memory)?
         {
-            observer.notice(Notice::Note(message));
-            settings.memory_efficient = true;
+            let lanes = settings.lanes(render::worker_threads(settings.threads), scene.camera.pixel_count());
+            match guard::check(&scene, &vcm_settings, r.seed, r.max_memory, lanes)? {
+                Guard::Fits => {}
+                // Each lane holds its own buffers: within the limit only one at a time.
+                Guard::OneIterationAtATime => settings.parallelism = render::Parallelism::Pixels,
+                Guard::SwitchToMemoryEfficient(message) => {
+                    observer.notice(Notice::Note(message));
+                    settings.memory_efficient = true;
+                    settings.parallelism = render::Parallelism::Pixels;
+                }
+            }
         }
         let recorded = Recorded {
             mask: match r.scene {

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use render::driver::Budget;
 use render::vcm::RadiusMode;
-use render::{Algorithm, RenderSettings};
+use render::{Algorithm, Parallelism, RenderSettings};
 
 use crate::slice::SliceSpec;
 use crate::source::SceneSource;
@@ -105,6 +105,8 @@ pub struct Request {
     /// Render only this slice of the iterations into the checkpoint (`--slice K/N`), for
     /// `vcm merge` ([`crate::slice`]). A resumed slice keeps its checkpoint's.
     pub slice: Option<SliceSpec>,
+    /// How the threads share the work (`--parallelism`): the image is the same either way.
+    pub parallelism: Parallelism,
 }
 
 impl Request {
@@ -146,6 +148,7 @@ impl Request {
             film: None,
             summation: None,
             slice: None,
+            parallelism: Parallelism::Auto,
         }
     }
 }

@@ -116,6 +116,18 @@ pub fn driver_bytes(pixel_count: usize, variance: bool) -> u64 {
     (pixel_count * film_bytes_per_pixel(variance)) as u64
 }
 
+/// The peak bytes of a render whose one-lane peak is `one_lane` when `lanes` iterations run side
+/// by side ([`crate::Parallelism::Iterations`]): the film's sums are shared, every other buffer
+/// (the engine's, the frame) is one per lane.
+pub fn lanes_bytes(one_lane: u64, pixel_count: usize, variance: bool, lanes: usize) -> u64 {
+    let shared = (pixel_count * (film_bytes_per_pixel(variance) - FRAME_BYTES_PER_PIXEL)) as u64;
+    let per_lane = one_lane.saturating_sub(shared);
+    shared.min(one_lane) + per_lane * lanes.max(1) as u64
+}
+
+/// Bytes per pixel of an iteration's frame (3 × f32), one per lane.
+const FRAME_BYTES_PER_PIXEL: usize = 12;
+
 /// Bytes per pixel of the film and the frame.
 fn film_bytes_per_pixel(variance: bool) -> usize {
     FILM_BYTES_PER_PIXEL + if variance { SQUARES_BYTES_PER_PIXEL } else { 0 }
