@@ -123,6 +123,9 @@ def readme_table(rows, commands):
 def algorithms_table(rows, commands):
     out = [
         stamp(commands),
+        "The phases are those of the last iteration; where `vcm bench` rendered iterations side by side "
+        "(the VCM engine's default at this size, `--parallelism`), one iteration on one thread, and the "
+        "peak holds one set of buffers per thread.",
         "",
         "| scene | algorithm | ms/iteration | CPU-s/iteration | light vertices | B/vertex | peak RSS MiB "
         "| guard estimate MiB | light / grid / camera ms |",

@@ -149,7 +149,9 @@ fn child(args: &BenchArgs, source: &session::SceneSource, name: AlgorithmName) -
     };
     // The guard's estimate, made where the session makes it: after loading, before rendering.
     let one = settings(Budget::Iterations(1));
-    let lanes = one.lanes(render::worker_threads(args.threads), scene.camera.pixel_count());
+    // Side by side only as many as there are iterations to render.
+    let lanes =
+        one.lanes(render::worker_threads(args.threads), scene.camera.pixel_count()).min(args.iterations as usize);
     let guard_bytes = match one.vcm_settings() {
         Some(vcm) => session::guard::estimate_bytes(&scene, &vcm, 0, lanes),
         None => {
