@@ -79,6 +79,7 @@ def render(
     heuristic: str = "balance",
     light_sampler: str = "tree",
     sampler: str = "sobol",
+    parallelism: str = "auto",
     max_memory: Optional[int] = None,
     permissive: bool = False,
 ) -> Image:
@@ -109,6 +110,7 @@ class Session:
         heuristic: str = "balance",
         light_sampler: str = "tree",
         sampler: str = "sobol",
+        parallelism: str = "auto",
         max_memory: Optional[int] = None,
         permissive: bool = False,
         techniques: bool = False,

@@ -43,6 +43,8 @@ pub struct Options {
     pub heuristic: String,
     pub light_sampler: String,
     pub sampler: String,
+    /// How the threads share the work (`--parallelism`): `auto`, `pixels` or `iterations`.
+    pub parallelism: String,
     pub max_memory: Option<u64>,
     pub permissive: bool,
     /// `vcm.Session` only: record per-technique images.
@@ -74,6 +76,7 @@ impl Default for Options {
             heuristic: request.heuristic.name().to_string(),
             light_sampler: request.light_sampler.name().to_string(),
             sampler: request.sampler.name().to_string(),
+            parallelism: request.parallelism.name().to_string(),
             max_memory: None,
             permissive: false,
             techniques: false,
@@ -83,7 +86,7 @@ impl Default for Options {
 }
 
 /// The keywords both functions accept.
-const COMMON: [&str; 17] = [
+const COMMON: [&str; 18] = [
     "algorithm",
     "resolution",
     "seed",
@@ -99,6 +102,7 @@ const COMMON: [&str; 17] = [
     "heuristic",
     "light_sampler",
     "sampler",
+    "parallelism",
     "max_memory",
     "permissive",
 ];
@@ -187,6 +191,7 @@ impl Options {
                 "heuristic" => o.heuristic = extract(caller, &key, v, "a str")?,
                 "light_sampler" => o.light_sampler = extract(caller, &key, v, "a str")?,
                 "sampler" => o.sampler = extract(caller, &key, v, "a str")?,
+                "parallelism" => o.parallelism = extract(caller, &key, v, "a str")?,
                 "max_memory" => o.max_memory = extract(caller, &key, v, "an int (bytes) or None")?,
                 "permissive" => o.permissive = extract(caller, &key, v, "a bool")?,
                 "techniques" => o.techniques = extract(caller, &key, v, "a bool")?,
@@ -244,6 +249,9 @@ impl Options {
             .ok_or_else(|| anyhow!("light_sampler: expected 'tree' or 'power', got '{}'", self.light_sampler))?;
         request.sampler = PrimarySamples::from_name(&self.sampler)
             .ok_or_else(|| anyhow!("sampler: expected 'sobol' or 'independent', got '{}'", self.sampler))?;
+        request.parallelism = render::Parallelism::from_name(&self.parallelism).ok_or_else(|| {
+            anyhow!("parallelism: expected 'auto', 'pixels' or 'iterations', got '{}'", self.parallelism)
+        })?;
         request.max_memory = self.max_memory;
         request.permissive = self.permissive;
         // `Session.variance()` may be asked for at any time.
