@@ -249,7 +249,15 @@ impl Prepared {
             match guard::check(&scene, &vcm_settings, r.seed, r.max_memory, lanes)? {
                 Guard::Fits => {}
                 // Each lane holds its own buffers: within the limit only one at a time.
-                Guard::OneIterationAtATime => settings.parallelism = render::Parallelism::Pixels,
+                Guard::OneIterationAtATime => {
+                    if r.parallelism == render::Parallelism::Iterations {
+                        observer.notice(Notice::Note(format!(
+                            "{lanes} iterations side by side would need more than --max-memory allows; rendering \
+                             one at a time with all threads (--parallelism pixels, the same image)"
+                        )));
+                    }
+                    settings.parallelism = render::Parallelism::Pixels;
+                }
                 Guard::SwitchToMemoryEfficient(message) => {
                     observer.notice(Notice::Note(message));
                     settings.memory_efficient = true;

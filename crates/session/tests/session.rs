@@ -63,6 +63,29 @@ fn a_session_renders_in_memory_and_reports_through_the_observer() {
         observer.notices
     );
 
+    // Iterations side by side that do not fit: one at a time, with a note when they were asked
+    // for (VCM at 512² holds about 62 MiB per lane here, without the film's squares).
+    for (parallelism, noted) in [(render::Parallelism::Iterations, true), (render::Parallelism::Auto, false)] {
+        let mut observer = Collect::default();
+        let resident = render::vcm::memory::resident_bytes().unwrap();
+        let one_lane = Request {
+            max_memory: Some(resident + (90 << 20)),
+            resolution: Some((512, 512)),
+            threads: 2,
+            parallelism,
+            ..request("vcm")
+        };
+        let outcome = session::render(&one_lane, None, &mut observer).unwrap();
+        assert_eq!(outcome.output.lanes, 1);
+        assert_eq!(outcome.output.film.iterations(), 2);
+        let note = |n: &Notice| matches!(n, Notice::Note(n) if n.contains("2 iterations side by side would need more"));
+        assert_eq!(observer.notices.iter().any(note), noted, "{:?}", observer.notices);
+        assert!(!observer.notices.iter().any(|n| n.to_string().contains("memory-efficient")), "{:?}", observer.notices);
+        // With room for both lanes, both are used.
+        let roomy = Request { max_memory: Some(resident + (400 << 20)), ..one_lane };
+        assert_eq!(session::render(&roomy, None, &mut Collect::default()).unwrap().output.lanes, 2);
+    }
+
     // Bad settings are errors before anything starts.
     let mut observer = Collect::default();
     let error = session::render(&Request { radius_alpha: 1.5, ..request("vcm") }, None, &mut observer).unwrap_err();
