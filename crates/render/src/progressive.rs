@@ -10,7 +10,7 @@
 //! **Iterations side by side** ([`crate::Parallelism::Iterations`]). An iteration of the VCM
 //! engine has phases that wait for each other (light pass, grid, camera pass): at each boundary
 //! a thread that finishes early waits for the others, and some hand-overs are serial. With
-//! several lanes, [`Progressive::step_many`] renders that many consecutive iterations at once,
+//! several lanes, [`Progressive::step_batch`] renders that many consecutive iterations at once,
 //! each on a thread of its own with its own integrator state, and adds them to the film in
 //! index order: the film is the one of [`Progressive::step`] bit for bit, because an iteration
 //! depends only on the seed and its index and not on the number of threads that render it.
@@ -40,11 +40,11 @@ pub struct Progressive<'a> {
     /// Statistics of the last added iteration (VCM engine only).
     last_stats: Option<IterationStats>,
     elapsed: Duration,
-    /// Iterations rendered at a time by [`Progressive::step_many`] (1: one at a time).
+    /// Iterations rendered at a time by [`Progressive::step_batch`] (1: one at a time).
     lanes: usize,
     /// Lane 0's one-thread pool (lane 0 is `renderer`, whose own pool has all the threads) and
     /// the other lanes' renderers, each with a one-thread pool of its own; made at the first
-    /// [`Progressive::step_many`] of more than one iteration.
+    /// [`Progressive::step_batch`] of more than one iteration.
     lane_pool: Option<rayon::ThreadPool>,
     other_lanes: Vec<Renderer<'a>>,
 }
@@ -126,27 +126,23 @@ impl<'a> Progressive<'a> {
         })
     }
 
-    /// Iterations [`Progressive::step_many`] renders at a time ([`RenderSettings::lanes`]).
+    /// Iterations [`Progressive::step_batch`] renders at a time ([`RenderSettings::lanes`]).
     pub fn lanes(&self) -> usize {
         self.lanes
     }
 
-    /// Renders the next `count` iterations and adds them to the film in order. With more than
-    /// one lane, up to [`Progressive::lanes`] of them at a time, one thread each; otherwise, or
-    /// for `count` 1, one at a time with all threads ([`Progressive::step`]). The film is the
+    /// Renders the next `min(at_most, lanes)` iterations ([`Progressive::lanes`]) and adds them
+    /// to the film in order: side by side, one thread each, when that is more than one, else one
+    /// with all threads ([`Progressive::step`]). Returns how many it rendered. The film is the
     /// same either way, bit for bit.
-    pub fn step_many(&mut self, count: usize) -> Result<(), String> {
-        let mut left = count;
-        while left > 0 {
-            let batch = left.min(self.lanes);
-            if batch <= 1 {
-                self.step()?;
-            } else {
-                self.step_lanes(batch)?;
-            }
-            left -= batch.max(1);
+    pub fn step_batch(&mut self, at_most: u64) -> Result<u64, String> {
+        let count = at_most.min(self.lanes as u64);
+        match count {
+            0 => {}
+            1 => self.step()?,
+            _ => self.step_lanes(count as usize)?,
         }
-        Ok(())
+        Ok(count)
     }
 
     /// Renders iterations `next .. next + count` side by side, one per lane, and adds them.
@@ -423,21 +419,21 @@ pub fn run_budget(
                 if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
                     return Ok(Pause::Stopped);
                 }
-                // Side by side when lanes are on: the whole batch when the iteration budget
-                // allows it, or, under a time budget, while the last batch's time still fits.
-                let count = match settings.budget {
-                    Budget::Iterations(n) => (n - iteration).min(progressive.lanes() as u64) as usize,
+                // Side by side when lanes are on: as many as the iteration budget leaves, or,
+                // under a time budget, a whole batch while the last batch's time still fits.
+                let at_most = match settings.budget {
+                    Budget::Iterations(n) => n - iteration,
                     Budget::Time(limit) => match last_batch {
                         Some(took) if start.elapsed() + took > limit => 1,
-                        _ => progressive.lanes(),
+                        _ => u64::MAX,
                     },
                 };
                 let batch_start = Instant::now();
-                progressive.step_many(count)?;
+                let count = progressive.step_batch(at_most)?;
                 if count > 1 {
                     last_batch = Some(batch_start.elapsed());
                 }
-                let done = iteration + count as u64;
+                let done = iteration + count;
                 if let Some(bar) = &progress {
                     match settings.budget {
                         Budget::Iterations(_) => bar.set_position(done),

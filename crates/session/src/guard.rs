@@ -30,27 +30,21 @@ pub fn check(scene: &Scene, settings: &VcmSettings, seed: u64, limit: Option<u64
         return Ok(Guard::Fits);
     };
     let resident = memory::resident_bytes().unwrap_or(0);
-    if lanes > 1 {
-        let pixels = scene.camera.pixel_count();
-        let per_lanes = |one| memory::lanes_bytes(one, pixels, settings.film_variance, lanes);
-        let fits = resident + per_lanes(memory::upper_bound(scene, settings)) <= limit
-            || resident + per_lanes(memory::estimate(scene, settings, seed).two_stage_bytes) <= limit;
-        if fits {
-            return Ok(Guard::Fits);
-        }
-        return Ok(match check(scene, settings, seed, Some(limit), 1)? {
-            Guard::Fits => Guard::OneIterationAtATime,
-            other => other,
-        });
-    }
-    if resident + memory::upper_bound(scene, settings) <= limit {
+    let pixels = scene.camera.pixel_count();
+    // Whether buffers of `one` bytes per lane fit with `lanes` lanes (one lane: `one` itself).
+    let fits = |one, lanes| resident + memory::lanes_bytes(one, pixels, settings.film_variance, lanes) <= limit;
+    let bound = memory::upper_bound(scene, settings);
+    if fits(bound, lanes) {
         return Ok(Guard::Fits);
     }
     let estimate = memory::estimate(scene, settings, seed);
-    let (two_stage, efficient) = (resident + estimate.two_stage_bytes, resident + estimate.memory_efficient_bytes);
-    if two_stage <= limit {
+    if fits(estimate.two_stage_bytes, lanes) {
         return Ok(Guard::Fits);
     }
+    if lanes > 1 && (fits(bound, 1) || fits(estimate.two_stage_bytes, 1)) {
+        return Ok(Guard::OneIterationAtATime);
+    }
+    let (two_stage, efficient) = (resident + estimate.two_stage_bytes, resident + estimate.memory_efficient_bytes);
     let need = format!(
         "{} light sub-paths x {:.2} stored vertices each need about {} at the peak",
         estimate.light_paths,

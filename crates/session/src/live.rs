@@ -39,7 +39,7 @@ impl Live {
     }
 
     /// Renders up to `iterations` more iterations, side by side when the render has lanes
-    /// ([`Progressive::step_many`]), checking `stop` before each batch; returns the number
+    /// ([`Progressive::step_batch`]), checking `stop` before each batch; returns the number
     /// rendered (fewer only when `stop` was set).
     pub fn step(&mut self, iterations: u64, stop: Option<&AtomicBool>) -> Result<u64> {
         self.cell.with_dependent_mut(|_, progressive| {
@@ -48,9 +48,7 @@ impl Live {
                 if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
                     return Ok(done);
                 }
-                let batch = (iterations - done).min(progressive.lanes() as u64);
-                progressive.step_many(batch as usize).map_err(anyhow::Error::msg)?;
-                done += batch;
+                done += progressive.step_batch(iterations - done).map_err(anyhow::Error::msg)?;
             }
             Ok(iterations)
         })
