@@ -55,6 +55,15 @@ impl Scene {
         if let Some(&index) = spectra.lights.keys().find(|&&i| i as usize >= desc.lights.len()) {
             return Err(format!("an emission spectrum refers to light {index} of {}", desc.lights.len()));
         }
+        // The primitives in one allocation made up front (at most one per triangle, sphere or
+        // disc). Grown by pushes, about half of a 1M-triangle mesh's records lay on 4 KiB pages
+        // although the heap asks for huge ones (docs/bvh.md, "Primitive records in one
+        // allocation").
+        let most_primitives = desc.shapes.iter().map(|s| match &s.geometry {
+            Geometry::Mesh(mesh) => mesh.triangles.len(),
+            Geometry::Sphere { .. } | Geometry::Disk { .. } => 1,
+        });
+        parts.primitives = Vec::with_capacity(most_primitives.sum());
         let mut shape_primitives = Vec::with_capacity(desc.shapes.len());
         for (shape_index, shape) in desc.shapes.iter().enumerate() {
             let index = shape_index as u32;
