@@ -44,6 +44,12 @@ pub struct PathTracer {
     pub heuristic: Heuristic,
     /// How next-event estimation picks a light.
     pub light_sampler: LightSampler,
+    /// Next-event estimation samples an image environment's *compensated* density
+    /// ([`Light::sample_direct_compensated`]: MIS compensation), which leaves the directions
+    /// dimmer than the map's mean to BSDF sampling. Unbiased either way; on by default
+    /// (docs/performance.md, "MIS compensation for environment maps"). The volumetric walk
+    /// always samples the full density.
+    pub mis_compensation: bool,
     /// Factor on the light-pick probability in the MIS weight of emitters hit by BSDF sampling
     /// only (not in next-event estimation's): 1 for a correct estimator. Any other value makes
     /// the weights not sum to one (a bias); tests use that to show they detect a wrong pmf.
@@ -113,18 +119,24 @@ impl LightSampler {
     /// environment map), its tables and texels, megabytes read at random, are fetched while the
     /// caller traces the ray to that vertex. Read from a copy of the generator: the stream and
     /// the image stay the same.
-    pub(crate) fn prefetch_next_event(self, scene: &Scene, rng: &Rng) {
+    /// `compensated`: for [`Light::sample_direct_compensated`] instead of
+    /// [`Light::sample_direct`].
+    pub(crate) fn prefetch_next_event(self, scene: &Scene, rng: &Rng, compensated: bool) {
         let mut ahead = rng.clone();
         let pick = ahead.uniform();
-        self.prefetch_next_event_for(scene, pick, ahead.uniform2());
+        self.prefetch_next_event_for(scene, pick, ahead.uniform2(), compensated);
     }
 
     /// [`LightSampler::prefetch_next_event`] for known numbers: the pick `pick` and the light's
     /// two numbers `u`.
     #[inline]
-    pub(crate) fn prefetch_next_event_for(self, scene: &Scene, pick: f32, u: [f32; 2]) {
+    pub(crate) fn prefetch_next_event_for(self, scene: &Scene, pick: f32, u: [f32; 2], compensated: bool) {
         if let Some(light) = self.pick_distant(scene, pick) {
-            light.prefetch_direct(u);
+            if compensated {
+                light.prefetch_direct_compensated(u);
+            } else {
+                light.prefetch_direct(u);
+            }
         }
     }
 
@@ -233,6 +245,7 @@ impl PathTracer {
             russian_roulette: RussianRoulette::default(),
             heuristic: Heuristic::Balance,
             light_sampler: LightSampler::default(),
+            mis_compensation: true,
             mis_pick_scale: 1.0,
             primary_samples: crate::primary_samples::PrimarySamples::Independent,
         }
@@ -298,6 +311,8 @@ fn radiance<S: SpectralMode, const HINT: bool>(
     dims: PathDims,
 ) -> S {
     let (max_length, nee, heuristic) = (tracer.max_length, tracer.next_event_estimation, tracer.heuristic);
+    // Next-event estimation and the MIS weight of escaping rays use the same density.
+    let compensated = tracer.mis_compensation;
     let sampler = tracer.light_sampler;
     let albedo_roulette = tracer.russian_roulette == RussianRoulette::Albedo;
     let sphere = &scene.bounding_sphere;
@@ -325,15 +340,19 @@ fn radiance<S: SpectralMode, const HINT: bool>(
         let stratified = dims.vertex(path_length - 1);
         if HINT {
             match &stratified {
-                Some(d) => sampler.prefetch_next_event_for(scene, d.pick_and_lobe[0], d.light),
-                None => sampler.prefetch_next_event(scene, rng),
+                Some(d) => sampler.prefetch_next_event_for(scene, d.pick_and_lobe[0], d.light, compensated),
+                None => sampler.prefetch_next_event(scene, rng, compensated),
             }
         }
         let Some(hit) = scene.intersect(&ray) else {
             // The ray leaves the scene: environment light.
-            if let Some(index) = scene.background
-                && let Some(emitted) =
-                    scene.lights[index as usize].radiance_on_hit(ray.direction, Vec3::ZERO, Vec3::ZERO, sphere)
+            let background = scene.background.map(|index| (index, &scene.lights[index as usize]));
+            if let Some((index, light)) = background
+                && let Some(emitted) = if compensated {
+                    light.radiance_on_hit_compensated(ray.direction, Vec3::ZERO, Vec3::ZERO, sphere)
+                } else {
+                    light.radiance_on_hit(ray.direction, Vec3::ZERO, Vec3::ZERO, sphere)
+                }
             {
                 let weight = if last_specular || !nee {
                     1.0
@@ -386,7 +405,12 @@ fn radiance<S: SpectralMode, const HINT: bool>(
             )
         {
             let u = stratified.map_or_else(|| rng.uniform2(), |d| d.light);
-            if let Some(direct) = light.sample_direct(hit.position, u, sphere)
+            let direct = if compensated {
+                light.sample_direct_compensated(hit.position, u, sphere)
+            } else {
+                light.sample_direct(hit.position, u, sphere)
+            };
+            if let Some(direct) = direct
                 && let Some(eval) = bsdf.evaluate(direct.direction)
                 && !scene.occluded(hit.position, direct.direction, direct.distance)
             {

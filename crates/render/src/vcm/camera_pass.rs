@@ -138,7 +138,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     // next-event sample hinted first (see `hint`).
     let next_surface = |ray: &Ray, rng: &mut Rng| {
         if hint {
-            LightSampler::Power.prefetch_next_event(scene, rng);
+            LightSampler::Power.prefetch_next_event(scene, rng, false);
         }
         scene.intersect(ray)
     };

@@ -8,6 +8,9 @@ use spectrum::Rgb;
 use super::{BoundingSphere, DirectSample, EmissionSample, HitRadiance, disc_origin, disc_pdf};
 use crate::desc::TextureImage;
 
+mod compensated;
+use compensated::Compensated;
+
 /// An image-based environment (Mitsuba 3's `envmap`), importance-sampled.
 ///
 /// Lookup: the world direction `d` is mapped to the local direction `v = R⁻¹·d` and to
@@ -26,6 +29,13 @@ use crate::desc::TextureImage;
 /// quarter row from the pole, so a lit pole row beside a black one keeps a density). A
 /// point `(s, t)` with density `p(s, t)` per unit area maps to a direction with density
 /// `p / (2π² sin θ)` per steradian.
+///
+/// Next-event estimation in the path tracer may sample a second, *compensated* density
+/// instead ([`Light::sample_direct_compensated`](super::Light::sample_direct_compensated); MIS
+/// compensation, Karlík et al. 2019, as pbrt-v4's path tracer samples its image lights): the
+/// lattice values are `max(0, luminance − L̄) × sin θ`, with `L̄` the map's mean luminance over
+/// the sphere, so directions dimmer than the mean are left to BSDF sampling, which the MIS
+/// weights then give the whole weight there (`envmap/compensated.rs`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EnvMapLight {
     data: Arc<EnvMapData>,
@@ -69,6 +79,18 @@ struct EnvMapData {
     cells_y_f32: f32,
     /// `∫ luminance(L(ω)) dω` over the sphere.
     luminance_integral: f32,
+    /// The compensated density, or `None` when no pixel is brighter than the mean (a
+    /// constant or black map): then the full density serves both.
+    compensated: Option<Compensated>,
+}
+
+/// Which of the map's two sampling densities a query uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Density {
+    /// `luminance × sin θ`: every technique's.
+    Full,
+    /// The compensated density where the map has one ([`Compensated`]).
+    Compensated,
 }
 
 impl EnvMapLight {
@@ -162,6 +184,7 @@ impl EnvMapLight {
         // A row without weight is never picked; it gets a uniform table (`AliasRows::new`).
         let columns = AliasRows::new(&weights, width)
             .ok_or_else(|| "environment map: cannot build the sampling distribution".to_string())?;
+        let compensated = Compensated::new(&pixels, width, integral, row_sin);
         let texels = pixels
             .iter()
             .zip(&lattice)
@@ -179,6 +202,7 @@ impl EnvMapLight {
                 width_f32: width as f32,
                 cells_y_f32: cells_y as f32,
                 luminance_integral: integral as f32,
+                compensated,
             }),
         })
     }
@@ -202,6 +226,14 @@ impl EnvMapLight {
     /// `s·W`, periodic, and `t·(H − 1)`) of the four surrounding texels.
     #[inline]
     fn evaluate(&self, direction: Vec3) -> (Rgb, f32) {
+        let (radiance, pdf, _) = self.evaluate_with(direction, Density::Full);
+        (radiance, pdf)
+    }
+
+    /// [`EnvMapLight::evaluate`] with the density `density`: the radiance, the chosen density's
+    /// pdf per steradian and the full density's (the same number for [`Density::Full`]).
+    #[inline]
+    fn evaluate_with(&self, direction: Vec3, density: Density) -> (Rgb, f32, f32) {
         let d = &*self.data;
         let local = self.to_local(direction);
         let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
@@ -215,16 +247,17 @@ impl EnvMapLight {
         let y = t * d.cells_y_f32;
         let j0 = (y.max(0.0) as u32).min(d.height as u32 - 2) as usize;
         let fy = (y - j0 as f32).clamp(0.0, 1.0);
-        let (radiance, density) = interpolate(d.corners(i0, j0), fx, fy);
-        let pdf = if sin_theta > 0.0 {
-            // 0 outside the closed unit square (NaN included).
-            let inside = (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t);
-            let pdf_area = if inside { density } else { 0.0 };
-            pdf_area / (2.0 * PI * PI * sin_theta)
-        } else {
-            0.0
+        let corners = d.corners(i0, j0);
+        let full = corners.map(|texel| texel.density);
+        let (radiance, full_density) = interpolate(corners, full, fx, fy);
+        let chosen_density = match d.compensated.as_ref().filter(|_| density == Density::Compensated) {
+            Some(c) => interpolate(corners, c.corners(&corners, j0), fx, fy).1,
+            None => full_density,
         };
-        (radiance, pdf)
+        // 0 outside the closed unit square (NaN included) and at the poles.
+        let inside = sin_theta > 0.0 && (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t);
+        let per_steradian = |density: f32| if inside { density / (2.0 * PI * PI * sin_theta) } else { 0.0 };
+        (radiance, per_steradian(chosen_density), per_steradian(full_density))
     }
 
     /// `∫ luminance(L(ω)) dω` over the whole sphere (W·m⁻²).
@@ -238,12 +271,27 @@ impl EnvMapLight {
     /// direction. Both are continuous, so the two queries agree to rounding (the direction's
     /// round trip through `atan2`/`acos`), and this skips that round trip. `None` when nothing is
     /// emitted from the sampled point (or at the poles, where the density is singular).
-    fn sample(&self, u: [f32; 2]) -> Option<(Vec3, Rgb, f32)> {
+    fn sample(&self, u: [f32; 2], density: Density) -> Option<(Vec3, Rgb, f32, f32)> {
         let d = &*self.data;
-        let (j0, v) = d.rows.sample_remapped(u[1]);
-        let (i0, w) = d.columns.sample_remapped(j0, u[0]);
+        let compensated = d.compensated.as_ref().filter(|_| density == Density::Compensated);
+        let (j0, v, i0, w) = match compensated {
+            None => {
+                let (j0, v) = d.rows.sample_remapped(u[1]);
+                let (i0, w) = d.columns.sample_remapped(j0, u[0]);
+                (j0, v, i0, w)
+            }
+            Some(c) => {
+                let (j0, v) = c.rows.sample_remapped(u[1]);
+                let (i0, w) = c.columns.sample_remapped(j0, u[0]);
+                (j0, v, i0, w)
+            }
+        };
         let corners = d.corners(i0, j0);
-        let f = warp::bilinear([w, v], corners.map(|texel| texel.density));
+        let densities = match compensated {
+            None => corners.map(|texel| texel.density),
+            Some(c) => c.corners(&corners, j0),
+        };
+        let f = warp::bilinear([w, v], densities);
         let (fx, fy) = (f.x, f.y);
         let (s, t) = ((i0 as f32 + fx) / d.width_f32, (j0 as f32 + fy) / d.cells_y_f32);
         // θ = πt is half a turn times t; φ = 2π·u_map is u_map turns.
@@ -260,9 +308,14 @@ impl EnvMapLight {
         let [c0, c1, c2] = d.to_world;
         let direction = (c0 * local.x + c1 * local.y + c2 * local.z).normalize();
         // The same interpolation as `evaluate`, at the sampled point of the cell.
-        let (radiance, density) = interpolate(corners, fx, fy);
+        let (radiance, density) = interpolate(corners, densities, fx, fy);
+        let full = match compensated {
+            None => density,
+            Some(_) => interpolate(corners, corners.map(|texel| texel.density), fx, fy).1,
+        };
         let pdf = density / (2.0 * PI * PI * sin_theta);
-        (pdf > 0.0 && !radiance.is_black()).then_some((direction, radiance, pdf))
+        let full_pdf = full / (2.0 * PI * PI * sin_theta);
+        (pdf > 0.0 && !radiance.is_black()).then_some((direction, radiance, pdf, full_pdf))
     }
 
     /// Prefetch hints ([`math::prefetch()`]) for what [`EnvMapLight::sample`] will read for the
@@ -273,10 +326,18 @@ impl EnvMapLight {
     /// median 0.976 over 16 rounds on matpreview `pt` for the two; docs/performance.md). A hint
     /// only: no value changes.
     #[inline]
-    pub(super) fn prefetch_sample(&self, u: [f32; 2]) {
+    pub(super) fn prefetch_sample(&self, u: [f32; 2], density: Density) {
         let d = &*self.data;
-        let (j0, _) = d.rows.sample_remapped(u[1]);
-        let (slot, i0) = d.columns.slot_of(j0, u[0]);
+        let (j0, (slot, i0)) = match d.compensated.as_ref().filter(|_| density == Density::Compensated) {
+            None => {
+                let (j0, _) = d.rows.sample_remapped(u[1]);
+                (j0, d.columns.slot_of(j0, u[0]))
+            }
+            Some(c) => {
+                let (j0, _) = c.rows.sample_remapped(u[1]);
+                (j0, c.columns.slot_of(j0, u[0]))
+            }
+        };
         math::prefetch(slot);
         for k in [j0 * d.width + i0, (j0 + 1) * d.width + i0] {
             math::prefetch(&d.texels[k]);
@@ -315,14 +376,14 @@ impl EnvMapData {
     }
 }
 
-/// The radiance and the sampling density interpolated bilinearly at `(fx, fy)` in a cell with
-/// the `corners` of [`EnvMapData::corners`].
+/// The radiance and a sampling density interpolated bilinearly at `(fx, fy)` in a cell with
+/// the `corners` of [`EnvMapData::corners`] and the density's values `densities` there.
 #[inline]
-fn interpolate([a, b, c, e]: [Texel; 4], fx: f32, fy: f32) -> (Rgb, f32) {
+fn interpolate([a, b, c, e]: [Texel; 4], densities: [f32; 4], fx: f32, fy: f32) -> (Rgb, f32) {
     let top = a.radiance * (1.0 - fx) + b.radiance * fx;
     let bottom = c.radiance * (1.0 - fx) + e.radiance * fx;
-    let top_density = a.density * (1.0 - fx) + b.density * fx;
-    let bottom_density = c.density * (1.0 - fx) + e.density * fx;
+    let top_density = densities[0] * (1.0 - fx) + densities[1] * fx;
+    let bottom_density = densities[2] * (1.0 - fx) + densities[3] * fx;
     (top * (1.0 - fy) + bottom * fy, top_density * (1.0 - fy) + bottom_density * fy)
 }
 
@@ -343,13 +404,24 @@ fn fraction(u: f32) -> f32 {
 impl EnvMapLight {
     /// Next-event estimation: a direction importance-sampled from the map.
     pub(super) fn sample_direct(&self, u: [f32; 2], sphere: &BoundingSphere) -> Option<DirectSample> {
-        let (direction, radiance, pdf) = self.sample(u)?;
+        self.sample_direct_with(u, sphere, Density::Full)
+    }
+
+    /// [`EnvMapLight::sample_direct`] from the compensated density (the full one when the map
+    /// has none): `direct_pdf` is the compensated density's, `emission_pdf` stays the full
+    /// density's.
+    pub(super) fn sample_direct_compensated(&self, u: [f32; 2], sphere: &BoundingSphere) -> Option<DirectSample> {
+        self.sample_direct_with(u, sphere, Density::Compensated)
+    }
+
+    fn sample_direct_with(&self, u: [f32; 2], sphere: &BoundingSphere, density: Density) -> Option<DirectSample> {
+        let (direction, radiance, pdf, full) = self.sample(u, density)?;
         Some(DirectSample {
             radiance,
             direction,
             distance: f32::INFINITY,
             direct_pdf: PdfW(pdf),
-            emission_pdf: PdfW(pdf * disc_pdf(sphere)),
+            emission_pdf: PdfW(full * disc_pdf(sphere)),
             cos_at_light: 1.0,
         })
     }
@@ -363,7 +435,7 @@ impl EnvMapLight {
         sphere: &BoundingSphere,
     ) -> EmissionSample {
         // The light travels away from the sampled environment direction.
-        let Some((towards_light, radiance, pdf)) = self.sample(u_direction) else {
+        let Some((towards_light, radiance, pdf, _)) = self.sample(u_direction, Density::Full) else {
             return EmissionSample {
                 normal: Vec3::ZERO,
                 energy: Rgb::BLACK,
@@ -388,13 +460,37 @@ impl EnvMapLight {
 
     /// The radiance of a ray escaping the scene along `ray_direction`.
     pub(super) fn radiance_on_hit(&self, ray_direction: Vec3, sphere: &BoundingSphere) -> Option<HitRadiance> {
-        let (radiance, pdf) = self.evaluate(ray_direction);
+        self.radiance_on_hit_with(ray_direction, sphere, Density::Full)
+    }
+
+    /// [`EnvMapLight::radiance_on_hit`] whose `direct_pdf` is the compensated density's (the
+    /// emission pdf stays the full density's).
+    pub(super) fn radiance_on_hit_compensated(
+        &self,
+        ray_direction: Vec3,
+        sphere: &BoundingSphere,
+    ) -> Option<HitRadiance> {
+        self.radiance_on_hit_with(ray_direction, sphere, Density::Compensated)
+    }
+
+    fn radiance_on_hit_with(
+        &self,
+        ray_direction: Vec3,
+        sphere: &BoundingSphere,
+        density: Density,
+    ) -> Option<HitRadiance> {
+        let (radiance, pdf, full) = self.evaluate_with(ray_direction, density);
         Some(HitRadiance {
             radiance,
             direct_pdf: PdfA(pdf),
-            emission_pdf: PdfW(pdf * disc_pdf(sphere)),
+            emission_pdf: PdfW(full * disc_pdf(sphere)),
             cos_at_light: 1.0,
         })
+    }
+
+    /// Whether the map has a compensated density (a pixel brighter than the mean).
+    pub fn has_compensated_density(&self) -> bool {
+        self.data.compensated.is_some()
     }
 }
 
@@ -469,7 +565,7 @@ mod tests {
                 })
                 .collect();
             directions.extend([Vec3::Y, -Vec3::Y, Vec3::X, -Vec3::X, Vec3::Z, -Vec3::Z]);
-            directions.extend((0..2000).filter_map(|_| light.sample(rng.uniform2()).map(|s| s.0)));
+            directions.extend((0..2000).filter_map(|_| light.sample(rng.uniform2(), Density::Full).map(|s| s.0)));
             for direction in directions {
                 let world = to_world[0] * direction.x + to_world[1] * direction.y + to_world[2] * direction.z;
                 for v in [direction, world] {
@@ -482,7 +578,7 @@ mod tests {
     #[test]
     fn a_sample_reports_what_evaluate_finds_for_its_direction() {
         // `sample` interpolates at the sampled point instead of re-deriving it from the
-        // direction: the two agree to rounding, relative 1e-4 plus the conditioning of
+        // direction, with either density: the two agree to rounding, relative 1e-4 plus the conditioning of
         // `evaluate`'s lookup near a pole: acos(y) moves by ε / sin θ for a rounding ε of y, and
         // the density and radiance there vary like θ (and with the ill-defined azimuth), so
         // relatively by about ε / sin² θ.
@@ -491,18 +587,80 @@ mod tests {
         let mut rng = Rng::new(9, 4);
         for (w, h) in [(8, 5), (1, 2), (7, 16), (64, 32)] {
             let light = test_light(w, h, rotation);
-            for _ in 0..20_000 {
-                let Some((direction, radiance, pdf)) = light.sample(rng.uniform2()) else { continue };
-                let (r, p) = light.evaluate(direction);
-                let close = |a: f32, b: f32, tolerance: f32| (a - b).abs() <= tolerance * a.abs().max(b.abs()) + 1e-6;
-                let local = light.to_local(direction);
-                let tolerance = 1e-4 + 2e-7 / (local.x * local.x + local.z * local.z);
-                assert!(close(pdf, p, tolerance), "{w}×{h}: pdf {pdf} vs {p} at {direction}");
-                for (a, b) in [(radiance.r, r.r), (radiance.g, r.g), (radiance.b, r.b)] {
-                    assert!(close(a, b, tolerance), "{w}×{h}: radiance {radiance:?} vs {r:?} at {direction}");
+            for density in [Density::Full, Density::Compensated] {
+                for _ in 0..20_000 {
+                    let Some((direction, radiance, pdf, full)) = light.sample(rng.uniform2(), density) else {
+                        continue;
+                    };
+                    let (r, p, full_p) = light.evaluate_with(direction, density);
+                    let close =
+                        |a: f32, b: f32, tolerance: f32| (a - b).abs() <= tolerance * a.abs().max(b.abs()) + 1e-6;
+                    let local = light.to_local(direction);
+                    let tolerance = 1e-4 + 2e-7 / (local.x * local.x + local.z * local.z);
+                    assert!(close(pdf, p, tolerance), "{w}×{h} {density:?}: pdf {pdf} vs {p} at {direction}");
+                    assert!(close(full, full_p, tolerance), "{w}×{h} {density:?}: full pdf {full} vs {full_p}");
+                    // The radiance is interpolated between corners that may differ a lot (the
+                    // test map's seam cell goes from 64 to 1), so its rounding is relative to
+                    // the cell's largest corner, not to the value.
+                    let (s, t) = light.square_of(local);
+                    let cell = (
+                        ((s * w as f32) as usize).min(w as usize - 1),
+                        ((t * (h - 1) as f32) as usize).min(h as usize - 2),
+                    );
+                    let scale = light
+                        .data
+                        .corners(cell.0, cell.1)
+                        .iter()
+                        .map(|t| t.radiance.max_component())
+                        .fold(0.0, f32::max);
+                    for (a, b) in [(radiance.r, r.r), (radiance.g, r.g), (radiance.b, r.b)] {
+                        assert!(
+                            (a - b).abs() <= tolerance * scale + 1e-6,
+                            "{w}×{h}: radiance {radiance:?} vs {r:?} at {direction}"
+                        );
+                    }
                 }
             }
         }
+    }
+
+    /// The compensated density is the full one's shape minus the mean: zero in the cells whose
+    /// four pixels are all at or below the map's mean luminance (while the full density is not),
+    /// never sampled there, and absent for a constant map.
+    #[test]
+    fn the_compensated_density_leaves_the_dim_cells_to_bsdf_sampling() {
+        let light = test_light(16, 9, [Vec3::X, Vec3::Y, Vec3::Z]);
+        let d = &*light.data;
+        let c = d.compensated.as_ref().expect("a map with a bright column has a compensated density");
+        let dim_cell = |i: usize, j: usize| {
+            d.corners(i, j).iter().zip([j, j, j + 1, j + 1]).all(|(t, row)| c.of(t.radiance, row) == 0.0)
+        };
+        let mut dim = 0;
+        let mut rng = Rng::new(3, 7);
+        for _ in 0..50_000 {
+            let direction = math::warp::uniform_sphere(rng.uniform2());
+            let (s, t) = light.square_of(light.to_local(direction));
+            let (i, j) = ((s * 16.0) as usize % 16, ((t * 8.0) as usize).min(7));
+            let (_, compensated, full) = light.evaluate_with(direction, Density::Compensated);
+            if dim_cell(i, j) {
+                dim += 1;
+                assert_eq!(compensated, 0.0, "dim cell ({i}, {j}) at {direction}");
+                assert!(full > 0.0, "the full density covers ({i}, {j})");
+            }
+        }
+        assert!(dim > 1000, "{dim} directions in dim cells");
+        for _ in 0..20_000 {
+            if let Some((direction, _, pdf, _)) = light.sample(rng.uniform2(), Density::Compensated) {
+                let (s, t) = light.square_of(light.to_local(direction));
+                let (i, j) = ((s * 16.0) as usize % 16, ((t * 8.0) as usize).min(7));
+                assert!(pdf > 0.0 && !dim_cell(i, j), "sampled the dim cell ({i}, {j})");
+            }
+        }
+        let constant = TextureImage { width: 8, height: 4, pixels: vec![Rgb::splat(0.7); 32] };
+        let constant = EnvMapLight::new(&constant, 1.0, [Vec3::X, Vec3::Y, Vec3::Z]).unwrap();
+        assert!(!constant.has_compensated_density());
+        let direction = Vec3::new(0.3, 0.5, -0.2).normalize();
+        assert_eq!(constant.evaluate_with(direction, Density::Compensated).1, constant.evaluate(direction).1);
     }
 
     #[test]

@@ -264,7 +264,15 @@ impl Light {
     #[inline]
     pub fn prefetch_direct(&self, u: [f32; 2]) {
         if let Light::EnvMap(light) = self {
-            light.prefetch_sample(u);
+            light.prefetch_sample(u, envmap::Density::Full);
+        }
+    }
+
+    /// [`Light::prefetch_direct`] for [`Light::sample_direct_compensated`].
+    #[inline]
+    pub fn prefetch_direct_compensated(&self, u: [f32; 2]) {
+        if let Light::EnvMap(light) = self {
+            light.prefetch_sample(u, envmap::Density::Compensated);
         }
     }
 
@@ -275,7 +283,7 @@ impl Light {
     #[inline]
     pub fn prefetch_emission(&self, u_direction: [f32; 2]) {
         if let Light::EnvMap(light) = self {
-            light.prefetch_sample(u_direction);
+            light.prefetch_sample(u_direction, envmap::Density::Full);
         }
     }
 
@@ -299,6 +307,42 @@ impl Light {
             Light::Directional(light) => light.sample_direct(sphere),
             Light::Background(light) => light.sample_direct(u, sphere),
             Light::EnvMap(light) => light.sample_direct(u, sphere),
+        }
+    }
+
+    /// [`Light::sample_direct`] for an estimator that combines next-event estimation with BSDF
+    /// sampling by MIS (the path tracer): an image environment samples its *compensated*
+    /// density (`EnvMapLight`'s documentation), which leaves the directions dimmer than its mean
+    /// to BSDF sampling; every other light samples as [`Light::sample_direct`]. `direct_pdf` is
+    /// the density sampled, so such an estimator must weigh the light's hits by
+    /// [`Light::radiance_on_hit_compensated`], whose `direct_pdf` is the same density: where it
+    /// is 0, BSDF sampling gets the whole weight, and nothing is lost as long as BSDF sampling
+    /// can reach every direction the BSDF scatters into (all non-delta BSDFs here). The
+    /// `emission_pdf` stays that of [`Light::sample_emission`].
+    pub fn sample_direct_compensated(
+        &self,
+        receiver: Vec3,
+        u: [f32; 2],
+        sphere: &BoundingSphere,
+    ) -> Option<DirectSample> {
+        match self {
+            Light::EnvMap(light) => light.sample_direct_compensated(u, sphere),
+            _ => self.sample_direct(receiver, u, sphere),
+        }
+    }
+
+    /// [`Light::radiance_on_hit`] with the `direct_pdf` of [`Light::sample_direct_compensated`]
+    /// (different only for an image environment).
+    pub fn radiance_on_hit_compensated(
+        &self,
+        ray_direction: Vec3,
+        position: Vec3,
+        normal: Vec3,
+        sphere: &BoundingSphere,
+    ) -> Option<HitRadiance> {
+        match self {
+            Light::EnvMap(light) => light.radiance_on_hit_compensated(ray_direction, sphere),
+            _ => self.radiance_on_hit(ray_direction, position, normal, sphere),
         }
     }
 
