@@ -248,10 +248,9 @@ impl EnvMapLight {
         let j0 = (y.max(0.0) as u32).min(d.height as u32 - 2) as usize;
         let fy = (y - j0 as f32).clamp(0.0, 1.0);
         let corners = d.corners(i0, j0);
-        let full = corners.map(|texel| texel.density);
-        let (radiance, full_density) = interpolate(corners, full, fx, fy);
-        let chosen_density = match d.compensated.as_ref().filter(|_| density == Density::Compensated) {
-            Some(c) => interpolate(corners, c.corners(&corners, j0), fx, fy).1,
+        let (radiance, full_density) = interpolate(corners, corners.map(|texel| texel.density), fx, fy);
+        let chosen_density = match d.compensated_for(density) {
+            Some(c) => bilinear_value(c.corners(&corners, j0), fx, fy),
             None => full_density,
         };
         // 0 outside the closed unit square (NaN included) and at the poles.
@@ -273,19 +272,10 @@ impl EnvMapLight {
     /// emitted from the sampled point (or at the poles, where the density is singular).
     fn sample(&self, u: [f32; 2], density: Density) -> Option<(Vec3, Rgb, f32, f32)> {
         let d = &*self.data;
-        let compensated = d.compensated.as_ref().filter(|_| density == Density::Compensated);
-        let (j0, v, i0, w) = match compensated {
-            None => {
-                let (j0, v) = d.rows.sample_remapped(u[1]);
-                let (i0, w) = d.columns.sample_remapped(j0, u[0]);
-                (j0, v, i0, w)
-            }
-            Some(c) => {
-                let (j0, v) = c.rows.sample_remapped(u[1]);
-                let (i0, w) = c.columns.sample_remapped(j0, u[0]);
-                (j0, v, i0, w)
-            }
-        };
+        let compensated = d.compensated_for(density);
+        let (rows, columns) = d.tables(compensated);
+        let (j0, v) = rows.sample_remapped(u[1]);
+        let (i0, w) = columns.sample_remapped(j0, u[0]);
         let corners = d.corners(i0, j0);
         let densities = match compensated {
             None => corners.map(|texel| texel.density),
@@ -311,7 +301,7 @@ impl EnvMapLight {
         let (radiance, density) = interpolate(corners, densities, fx, fy);
         let full = match compensated {
             None => density,
-            Some(_) => interpolate(corners, corners.map(|texel| texel.density), fx, fy).1,
+            Some(_) => bilinear_value(corners.map(|texel| texel.density), fx, fy),
         };
         let pdf = density / (2.0 * PI * PI * sin_theta);
         let full_pdf = full / (2.0 * PI * PI * sin_theta);
@@ -328,16 +318,9 @@ impl EnvMapLight {
     #[inline]
     pub(super) fn prefetch_sample(&self, u: [f32; 2], density: Density) {
         let d = &*self.data;
-        let (j0, (slot, i0)) = match d.compensated.as_ref().filter(|_| density == Density::Compensated) {
-            None => {
-                let (j0, _) = d.rows.sample_remapped(u[1]);
-                (j0, d.columns.slot_of(j0, u[0]))
-            }
-            Some(c) => {
-                let (j0, _) = c.rows.sample_remapped(u[1]);
-                (j0, c.columns.slot_of(j0, u[0]))
-            }
-        };
+        let (rows, columns) = d.tables(d.compensated_for(density));
+        let (j0, _) = rows.sample_remapped(u[1]);
+        let (slot, i0) = columns.slot_of(j0, u[0]);
         math::prefetch(slot);
         for k in [j0 * d.width + i0, (j0 + 1) * d.width + i0] {
             math::prefetch(&d.texels[k]);
@@ -363,6 +346,23 @@ impl EnvMapLight {
 }
 
 impl EnvMapData {
+    /// The compensated density when `density` asks for it and the map has one (`None`: the
+    /// full density serves).
+    #[inline]
+    fn compensated_for(&self, density: Density) -> Option<&Compensated> {
+        self.compensated.as_ref().filter(|_| density == Density::Compensated)
+    }
+
+    /// The tables that pick a cell of the full density, or of `compensated`: the row
+    /// distribution and the per-row alias tables.
+    #[inline]
+    fn tables<'a>(&'a self, compensated: Option<&'a Compensated>) -> (&'a Distribution1D, &'a AliasRows) {
+        match compensated {
+            Some(c) => (&c.rows, &c.columns),
+            None => (&self.rows, &self.columns),
+        }
+    }
+
     /// The texels at the corners of lattice cell `(i0, j0)` (`j0 < H − 1`): upper left, upper
     /// right (column `i0 + 1`, wrapping to 0), lower left, lower right.
     /// Always inlined: as a call (which `#[inline]` left it) the four texels came back through
@@ -382,9 +382,16 @@ impl EnvMapData {
 fn interpolate([a, b, c, e]: [Texel; 4], densities: [f32; 4], fx: f32, fy: f32) -> (Rgb, f32) {
     let top = a.radiance * (1.0 - fx) + b.radiance * fx;
     let bottom = c.radiance * (1.0 - fx) + e.radiance * fx;
-    let top_density = densities[0] * (1.0 - fx) + densities[1] * fx;
-    let bottom_density = densities[2] * (1.0 - fx) + densities[3] * fx;
-    (top * (1.0 - fy) + bottom * fy, top_density * (1.0 - fy) + bottom_density * fy)
+    (top * (1.0 - fy) + bottom * fy, bilinear_value(densities, fx, fy))
+}
+
+/// The bilinear interpolation at `(fx, fy)` of four corner values in [`EnvMapData::corners`]'
+/// order.
+#[inline]
+fn bilinear_value(corners: [f32; 4], fx: f32, fy: f32) -> f32 {
+    let top = corners[0] * (1.0 - fx) + corners[1] * fx;
+    let bottom = corners[2] * (1.0 - fx) + corners[3] * fx;
+    top * (1.0 - fy) + bottom * fy
 }
 
 /// `u − ⌊u⌋`, bit for bit, without the library `floor` for `u ∈ [−1, 1)` (the range of the
