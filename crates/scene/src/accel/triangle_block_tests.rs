@@ -78,6 +78,24 @@ fn blocks_match_brute_force_on_random_soups() {
     }
 }
 
+/// Trees large enough for the queries' cache hints on pushed children
+/// ([`super::traverse::HINT_MIN_NODES`] nodes or more) answer exactly as brute force, with the
+/// triangles in the closure and in blocks. (A hint changes no answer; this runs that code.)
+#[test]
+fn trees_with_child_hints_match_brute_force() {
+    let mut rng = Rng::for_stream(29, 0, 0);
+    let tris = random_soup(&mut rng, 100_000, 0.3);
+    let rays = random_rays(&mut rng, 300);
+    let closure_tree = Bvh::build(&triangle_bounds(&tris));
+    let nodes = closure_tree.stats().wide_nodes;
+    assert!(nodes >= super::traverse::HINT_MIN_NODES, "{nodes} nodes: too few for the hints");
+    let hit = |i: usize, r: &Ray, t: f32| intersect_triangle(&tris[i], r, t);
+    let (wrong, hits) = mismatches(&closure_tree, tris.len(), &rays, hit);
+    assert!(wrong.is_empty(), "{} of {} rays differ, first: {}", wrong.len(), rays.len(), wrong[0]);
+    assert!(hits >= 50, "too few hits ({hits})");
+    check_blocks(&tris, &rays);
+}
+
 /// The same tree, the same visits and the same counts as [`Bvh::build`] with the triangle test in
 /// the closure: blocks change how a leaf is tested, not the traversal. (An any-hit query counts
 /// a whole block where the closure stops at the first blocker of a leaf.)
