@@ -16,6 +16,7 @@ CASES = [
     ("scenes/cornell-fluorescent.xml", "bpt", ["--max-length", "5"], {"max_length": 5}),
     ("cornell-area-mirror", "pt", ["--light-sampler", "power"], {"light_sampler": "power"}),
     ("cornell-area-mirror", "pt", ["--sampler", "independent"], {"sampler": "independent"}),
+    ("cornell-env", "bpt", ["--mis-compensation", "off"], {"mis_compensation": False}),
     ("cornell-point", "vcm", ["--parallelism", "iterations"], {"parallelism": "iterations"}),
     ("cornell-point", "vcm", ["--parallelism", "pixels"], {"parallelism": "iterations"}),
     ("cornell-fog", "vcm", [], {}),

@@ -42,6 +42,8 @@ pub struct Options {
     pub rr_depth: Option<String>,
     pub heuristic: String,
     pub light_sampler: String,
+    /// MIS compensation for image environments (`--mis-compensation`).
+    pub mis_compensation: bool,
     pub sampler: String,
     /// How the threads share the work (`--parallelism`): `auto`, `pixels` or `iterations`.
     pub parallelism: String,
@@ -75,6 +77,7 @@ impl Default for Options {
             rr_depth: None,
             heuristic: request.heuristic.name().to_string(),
             light_sampler: request.light_sampler.name().to_string(),
+            mis_compensation: request.mis_compensation,
             sampler: request.sampler.name().to_string(),
             parallelism: request.parallelism.name().to_string(),
             max_memory: None,
@@ -86,7 +89,7 @@ impl Default for Options {
 }
 
 /// The keywords both functions accept.
-const COMMON: [&str; 18] = [
+const COMMON: [&str; 19] = [
     "algorithm",
     "resolution",
     "seed",
@@ -101,6 +104,7 @@ const COMMON: [&str; 18] = [
     "rr_depth",
     "heuristic",
     "light_sampler",
+    "mis_compensation",
     "sampler",
     "parallelism",
     "max_memory",
@@ -190,6 +194,7 @@ impl Options {
                 "rr_depth" => o.rr_depth = extract_rr_depth(caller, v)?,
                 "heuristic" => o.heuristic = extract(caller, &key, v, "a str")?,
                 "light_sampler" => o.light_sampler = extract(caller, &key, v, "a str")?,
+                "mis_compensation" => o.mis_compensation = extract(caller, &key, v, "a bool")?,
                 "sampler" => o.sampler = extract(caller, &key, v, "a str")?,
                 "parallelism" => o.parallelism = extract(caller, &key, v, "a str")?,
                 "max_memory" => o.max_memory = extract(caller, &key, v, "an int (bytes) or None")?,
@@ -247,6 +252,7 @@ impl Options {
             .ok_or_else(|| anyhow!("heuristic: expected 'balance' or 'power', got '{}'", self.heuristic))?;
         request.light_sampler = LightSampler::from_name(&self.light_sampler)
             .ok_or_else(|| anyhow!("light_sampler: expected 'tree' or 'power', got '{}'", self.light_sampler))?;
+        request.mis_compensation = self.mis_compensation;
         request.sampler = PrimarySamples::from_name(&self.sampler)
             .ok_or_else(|| anyhow!("sampler: expected 'sobol' or 'independent', got '{}'", self.sampler))?;
         request.parallelism = render::Parallelism::from_name(&self.parallelism).ok_or_else(|| {

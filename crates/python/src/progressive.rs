@@ -45,14 +45,15 @@ impl Notices {
 /// file's sample count, else 64) or `time` (seconds), `resolution`, `seed`, `threads` (`None`:
 /// all cores), `max_length`, `spectral`, `radius_factor`, `radius_alpha`,
 /// `volume_radius_factor`, `radius_mode`, `memory_efficient`, `rr_depth`, `heuristic`,
-/// `light_sampler`, `sampler`, `parallelism`, `max_memory`, `permissive`. Ctrl-C stops after the current iteration and
+/// `light_sampler`, `mis_compensation`, `sampler`, `parallelism`, `max_memory`, `permissive`. Ctrl-C stops after the current iteration and
 /// raises `KeyboardInterrupt`.
 #[pyfunction]
 #[pyo3(signature = (scene, **kwargs))]
 #[pyo3(text_signature = "(scene, *, algorithm='vcm', iterations=None, time=None, resolution=None, seed=0, \
     threads=None, max_length=None, spectral=False, radius_factor=None, radius_alpha=None, \
     volume_radius_factor=None, radius_mode='global', memory_efficient=False, rr_depth=None, \
-    heuristic='balance', light_sampler='tree', sampler='sobol', parallelism='auto', max_memory=None, permissive=False)")]
+    heuristic='balance', light_sampler='tree', mis_compensation=True, sampler='sobol', parallelism='auto', max_memory=None, \
+    permissive=False)")]
 pub fn render<'py>(py: Python<'py>, scene: &Scene, kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Bound<'py, PyAny>> {
     let options = Options::parse(Caller::Render, kwargs)?;
     let request = options.request(scene.source.clone()).map_err(value_error)?;
@@ -101,7 +102,8 @@ impl Session {
     #[pyo3(text_signature = "(scene, *, algorithm='vcm', resolution=None, seed=0, threads=None, \
         max_length=None, spectral=False, radius_factor=None, radius_alpha=None, volume_radius_factor=None, \
         radius_mode='global', memory_efficient=False, rr_depth=None, heuristic='balance', \
-        light_sampler='tree', sampler='sobol', parallelism='auto', max_memory=None, permissive=False, techniques=False, \
+        light_sampler='tree', mis_compensation=True, sampler='sobol', parallelism='auto', max_memory=None, permissive=False, \
+        techniques=False, \
         technique_length=4)")]
     fn new(py: Python<'_>, scene: &Scene, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let options = Options::parse(Caller::Session, kwargs)?;

@@ -103,6 +103,9 @@ pub struct RenderSettings {
     pub heuristic: crate::path_tracer::Heuristic,
     /// How the path tracer (`pt`) picks lights for next-event estimation.
     pub light_sampler: crate::path_tracer::LightSampler,
+    /// MIS compensation for image environments in `pt` and the VCM engine's algorithms
+    /// ([`PathTracer::mis_compensation`], [`VcmSettings::mis_compensation`]). Default: on.
+    pub mis_compensation: bool,
     /// Where the path tracer (`pt`) takes its first vertices' numbers from
     /// ([`crate::primary_samples`]). Default: independent numbers (the front ends' default,
     /// `session::Request`, is the stratified sequence).
@@ -140,6 +143,7 @@ impl Default for RenderSettings {
             russian_roulette: crate::path_tracer::RussianRoulette::default(),
             heuristic: crate::path_tracer::Heuristic::Balance,
             light_sampler: crate::path_tracer::LightSampler::default(),
+            mis_compensation: true,
             primary_samples: PrimarySamples::default(),
             wavelength_groups: crate::vcm::wavelengths::DEFAULT_WAVELENGTH_GROUPS,
             variance: true,
@@ -164,6 +168,7 @@ impl RenderSettings {
                 spectral: self.spectral,
                 wavelength_groups: self.wavelength_groups,
                 film_variance: self.variance,
+                mis_compensation: self.mis_compensation,
             }),
             _ => None,
         }
@@ -262,6 +267,7 @@ impl<'a> Renderer<'a> {
                 russian_roulette: settings.russian_roulette,
                 heuristic: settings.heuristic,
                 light_sampler: settings.light_sampler,
+                mis_compensation: settings.mis_compensation,
                 primary_samples: settings.primary_samples,
                 ..PathTracer::new(settings.max_length)
             }),

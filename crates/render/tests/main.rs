@@ -22,6 +22,7 @@ mod masked_emitter;
 mod media;
 mod mesh_attributes;
 mod mesh_attributes_vcm;
+mod mis_compensation;
 mod mis_oracle;
 mod mis_oracle_media;
 mod mitsuba_reference;

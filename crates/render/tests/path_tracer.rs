@@ -177,37 +177,13 @@ fn next_event_estimation_and_bsdf_sampling_alone_agree() {
     }
 }
 
-/// The built-in box with the environment (mask 456) lit by an image environment instead of the
-/// constant one: a 16 × 8 map with a bright patch, a gradient and dark rows.
-fn image_environment_box() -> Scene {
-    let base = cornell::build(456, 32, 32).unwrap();
-    assert!(base.lights.len() == 1 && base.lights[0].is_environment());
-    let (w, h) = (16u32, 8u32);
-    let pixels = (0..w * h)
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            match (x, y) {
-                (5..=7, 2..=3) => spectrum::Rgb::new(30.0, 24.0, 12.0),
-                (_, 6..) => spectrum::Rgb::splat(0.05),
-                _ => spectrum::Rgb::new(0.3 + 0.1 * x as f32, 0.6, 1.0 - 0.05 * x as f32),
-            }
-        })
-        .collect();
-    let image = std::sync::Arc::new(scene::desc::TextureImage { width: w, height: h, pixels });
-    let rotation = [math::Vec3::X, math::Vec3::Z, -math::Vec3::Y];
-    let env = Light::from_desc(&scene::desc::LightDesc::EnvMap { image, scale: 1.0, to_world: rotation }).unwrap();
-    let scene = Scene::new("env-map box", base.primitives.clone(), base.materials.clone(), vec![env], base.camera);
-    assert!(matches!(&scene.lights[0], Light::EnvMap(map) if map.has_compensated_density()));
-    scene
-}
-
 /// MIS compensation (next-event estimation from the environment map's compensated density,
 /// the default) against an estimator without next-event estimation, which shares no density
 /// with it: the block means agree, a 2 % error in either would be found, and the compensation
 /// is really at work (the estimates differ from those of the full density's sample by sample).
 #[test]
 fn mis_compensation_agrees_with_bsdf_sampling_alone() {
-    let scene = image_environment_box();
+    let scene = common::image_environment_box();
     let compensated = PathTracer::new(10);
     assert!(compensated.mis_compensation, "the default");
     let (a_mean, a_se) = block_statistics(&scene, compensated, 512, 16, 1);

@@ -66,6 +66,9 @@ pub struct Recorded {
     /// Light sampler of the path tracer (absent in checkpoints written before it existed:
     /// `power`, the only one then).
     pub light_sampler: LightSampler,
+    /// MIS compensation for image environments (absent in checkpoints written before it was
+    /// recorded: on, the default since; both settings estimate the same image).
+    pub mis_compensation: bool,
     /// Where the path tracer's first vertices' numbers come from (absent in checkpoints written
     /// before it existed: `independent`, the only one then).
     pub sampler: PrimarySamples,
@@ -159,6 +162,7 @@ pub fn header_lines(r: &Recorded) -> Vec<String> {
     lines.push(format!("russian_roulette={}", r.russian_roulette.name()));
     lines.push(format!("heuristic={}", r.heuristic.name()));
     lines.push(format!("light_sampler={}", r.light_sampler.name()));
+    lines.push(format!("mis_compensation={}", r.mis_compensation));
     lines.push(format!("sampler={}", r.sampler.name()));
     lines.push(format!("film={}", r.film));
     lines.push(format!("sums={}", r.sums.name()));
@@ -259,6 +263,10 @@ pub fn load(path: &Path) -> Result<(Recorded, Film)> {
             None => LightSampler::Power,
             Some(name) => LightSampler::from_name(name).ok_or_else(|| missing("light_sampler"))?,
         },
+        mis_compensation: match fields.get("mis_compensation") {
+            None => true,
+            Some(_) => field(&fields, "mis_compensation").ok_or_else(|| missing("mis_compensation"))?,
+        },
         film: fields.get("film").map_or_else(|| "fis".to_string(), |f| f.to_string()),
         fingerprint: Fingerprint { hash: scene_hash, files },
         sums: match fields.get("sums") {
@@ -338,6 +346,7 @@ mod tests {
             russian_roulette: RussianRoulette::Albedo,
             heuristic: Heuristic::Power,
             light_sampler: LightSampler::Power,
+            mis_compensation: true,
             sampler: PrimarySamples::Independent,
             film: "splat".into(),
             fingerprint: Fingerprint::builtin(450, (3, 2)),
@@ -390,7 +399,9 @@ mod tests {
             .replace("\nsums=float", "")
             .replace("\nfirst_iteration=0", "")
             // Written before the light sampler existed: power selection.
-            .replace("\nlight_sampler=power", "");
+            .replace("\nlight_sampler=power", "")
+            // Written before the MIS compensation was recorded: on.
+            .replace("\nmis_compensation=true", "");
         std::fs::write(&path, [header.as_bytes(), &text[header_end..]].concat()).unwrap();
         let (back, film_back) = load(&path).unwrap();
         assert_eq!((back, film_back.sums().to_vec(), film_back.first_iteration()), (recorded, sums, 0));
@@ -417,6 +428,7 @@ mod tests {
             russian_roulette: RussianRoulette::Albedo,
             heuristic: Heuristic::Balance,
             light_sampler: LightSampler::Tree,
+            mis_compensation: false,
             sampler: PrimarySamples::Sobol,
             film: "fis".into(),
             fingerprint: Fingerprint::builtin(1, (2, 1)),

@@ -87,6 +87,7 @@ impl Prepared {
                 request.russian_roulette = Some(recorded.russian_roulette);
                 request.heuristic = recorded.heuristic;
                 request.light_sampler = recorded.light_sampler;
+                request.mis_compensation = recorded.mis_compensation;
                 request.sampler = recorded.sampler;
                 let mode = FilmMode::from_name(&recorded.film)
                     .ok_or_else(|| anyhow::anyhow!("unknown film mode '{}' in '{}'", recorded.film, path.display()))?;
@@ -216,6 +217,7 @@ impl Prepared {
             russian_roulette,
             heuristic: r.heuristic,
             light_sampler: r.light_sampler,
+            mis_compensation: r.mis_compensation,
             primary_samples: r.sampler,
             // Checkpoints always carry the sums of squares, so that any resume can ask for a
             // variance image.
@@ -287,6 +289,7 @@ impl Prepared {
             russian_roulette,
             heuristic: r.heuristic,
             light_sampler: r.light_sampler,
+            mis_compensation: r.mis_compensation,
             sampler: r.sampler,
             film: scene.camera.film.name().to_string(),
             fingerprint,

@@ -92,6 +92,10 @@ pub struct Request {
     pub heuristic: Heuristic,
     /// Light sampler of the path tracer's next-event estimation (`pt`).
     pub light_sampler: LightSampler,
+    /// MIS compensation for image environments in `pt` and the VCM engine's algorithms
+    /// (`--mis-compensation`, [`RenderSettings::mis_compensation`]). A resumed render keeps its
+    /// checkpoint's.
+    pub mis_compensation: bool,
     /// Where the path tracer (`pt`) takes its first vertices' numbers from (`--sampler`).
     pub sampler: PrimarySamples,
     /// How camera samples reach the pixels (`--film`). `None`: the scene's choice, splatting
@@ -144,6 +148,7 @@ impl Request {
             russian_roulette: Some(RussianRoulette::Albedo),
             heuristic: defaults.heuristic,
             light_sampler: defaults.light_sampler,
+            mis_compensation: defaults.mis_compensation,
             sampler: DEFAULT_SAMPLER,
             film: None,
             summation: None,

@@ -7,6 +7,7 @@
 
 use math::{RAY_EPSILON, Ray, Rng, Vec3};
 use scene::camera::PrimaryDensity;
+use scene::light::Light;
 use scene::{Bsdf, Scene, SurfaceHit, TransportMode};
 use spectrum::SpectralMode;
 
@@ -138,7 +139,7 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
     // next-event sample hinted first (see `hint`).
     let next_surface = |ray: &Ray, rng: &mut Rng| {
         if hint {
-            LightSampler::Power.prefetch_next_event(scene, rng, false);
+            LightSampler::Power.prefetch_next_event(scene, rng, it.mis_compensation);
         }
         scene.intersect(ray)
     };
@@ -173,13 +174,17 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
                 path.mis.apply_flight(path.flight.forward, path.flight.reverse);
             }
             // Escaped: the environment light (infinite: no distance update, §5.1).
+            let direction = path.ray.direction;
+            let escaped = |light: &Light| {
+                // With MIS compensation the next-event technique's pdf is the compensated one.
+                if it.mis_compensation {
+                    light.radiance_on_hit_compensated(direction, Vec3::ZERO, Vec3::ZERO, &scene.bounding_sphere)
+                } else {
+                    light.radiance_on_hit(direction, Vec3::ZERO, Vec3::ZERO, &scene.bounding_sphere)
+                }
+            };
             if let Some(index) = scene.background
-                && let Some(emitted) = scene.lights[index as usize].radiance_on_hit(
-                    path.ray.direction,
-                    Vec3::ZERO,
-                    Vec3::ZERO,
-                    &scene.bounding_sphere,
-                )
+                && let Some(emitted) = escaped(&scene.lights[index as usize])
                 && let pick = scene.light_pick_probability(index)
                 && let Some(weight) =
                     emitter_weight(&path, techniques, emitted.direct_pdf.0 * pick, emitted.emission_pdf.0 * pick)
@@ -252,7 +257,12 @@ pub fn trace_camera_path_into<S: SpectralMode, R: Record>(
         if !bsdf.is_delta() {
             if techniques.connect {
                 // Next-event estimation (s = 1).
-                out.record(Family::NextEvent, 1, t, next_event(scene, &path, &end, rng, k, w).to_rgb(w));
+                out.record(
+                    Family::NextEvent,
+                    1,
+                    t,
+                    next_event(scene, &path, &end, rng, k, it.mis_compensation, w).to_rgb(w),
+                );
             }
             if let (Some(source), Some(plan)) = (merge_source, &grid_query) {
                 source.prefetch_records(plan);
@@ -374,7 +384,7 @@ fn medium_vertex<S: SpectralMode, R: Record>(
         grid_query: None,
     };
     if techniques.connect {
-        out.record(Family::NextEvent, 1, t, next_event(scene, path, &end, rng, k, w).to_rgb(w));
+        out.record(Family::NextEvent, 1, t, next_event(scene, path, &end, rng, k, it.mis_compensation, w).to_rgb(w));
         for (index, light) in light_path.iter().enumerate() {
             if light.record.path_length() + 1 + path.path_length > it.max_length {
                 break;

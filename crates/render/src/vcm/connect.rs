@@ -315,20 +315,28 @@ impl LightBsdfs {
     }
 }
 
-/// Next-event estimation from camera vertex `end` (s = 1), MIS-weighted (eqs. 44, 45).
+/// Next-event estimation from camera vertex `end` (s = 1), MIS-weighted (eqs. 44, 45);
+/// `compensated`: from [`scene::light::Light::sample_direct_compensated`] (MIS compensation,
+/// [`super::Iteration::mis_compensation`]).
 pub fn next_event<S: SpectralMode>(
     scene: &Scene,
     camera: &SubPath<S>,
     end: &CameraEnd,
     rng: &mut Rng,
     k: &MisConstants,
+    compensated: bool,
     wavelengths: &S::Wavelengths,
 ) -> S {
     let (scatterer, position) = (&end.scatterer, end.position);
     let pick_u = rng.uniform();
     let u = rng.uniform2();
     let Some((index, light, pick)) = scene.pick_light(pick_u) else { return S::default() };
-    let Some(direct) = light.sample_direct(position, u, &scene.bounding_sphere) else { return S::default() };
+    let direct = if compensated {
+        light.sample_direct_compensated(position, u, &scene.bounding_sphere)
+    } else {
+        light.sample_direct(position, u, &scene.bounding_sphere)
+    };
+    let Some(direct) = direct else { return S::default() };
     let Some(eval) = scatterer.evaluate(direct.direction) else { return S::default() };
     let continuation = scatterer.continuation();
     let mut pdfs = NeePdfs {

@@ -74,7 +74,13 @@ pub fn trace_light_path<S: SpectralMode>(
     let PathStart { camera_seed, pick_u, u_position, u_direction } = PathStart::draw(rng);
     let mut camera_rng = Rng::new(camera_seed, CAMERA_CONNECTIONS);
     let Some((index, light, pick)) = scene.pick_light(pick_u) else { return };
-    let emission = light.sample_emission(u_position, u_direction, &scene.bounding_sphere);
+    // With MIS compensation, `direct_pdf` is the compensated density's: the next-event
+    // technique's pdf in the sub-path's MIS quantities.
+    let emission = if it.mis_compensation {
+        light.sample_emission_compensated(u_position, u_direction, &scene.bounding_sphere)
+    } else {
+        light.sample_emission(u_position, u_direction, &scene.bounding_sphere)
+    };
     let emission_pdf = emission.emission_pdf.0 * pick;
     let direct_pdf = emission.direct_pdf.0 * pick;
     if emission_pdf.is_nan() || emission_pdf <= 0.0 || emission.energy.is_black() {

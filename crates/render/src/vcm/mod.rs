@@ -250,12 +250,22 @@ pub struct VcmSettings {
     /// The driver's film keeps the sums of squares ([`crate::RenderSettings::variance`]); only
     /// the memory estimate ([`memory`]) reads it.
     pub film_variance: bool,
+    /// MIS compensation: next-event estimation samples an image environment's compensated
+    /// density ([`Light::sample_direct_compensated`]), and every MIS weight of the engine uses
+    /// that density as the next-event technique's pdf (camera sub-paths escaping to the map, and
+    /// the start of light sub-paths from it: [`Light::sample_emission_compensated`]). Only in
+    /// scenes without media (their vertices in media sample the full density); other lights are
+    /// unaffected.
+    ///
+    /// [`Light::sample_direct_compensated`]: scene::light::Light::sample_direct_compensated
+    /// [`Light::sample_emission_compensated`]: scene::light::Light::sample_emission_compensated
+    pub mis_compensation: bool,
 }
 
 impl VcmSettings {
     /// Defaults: radius factor 0.003, volume radius factor [`DEFAULT_VOLUME_RADIUS_FACTOR`],
     /// α = 0.75, 10 segments, global radius, two-stage mode, [`DEFAULT_WAVELENGTH_GROUPS`]
-    /// wavelength groups.
+    /// wavelength groups, MIS compensation on.
     pub fn new(algorithm: VcmAlgorithm) -> Self {
         Self {
             algorithm,
@@ -268,6 +278,7 @@ impl VcmSettings {
             spectral: false,
             wavelength_groups: DEFAULT_WAVELENGTH_GROUPS,
             film_variance: true,
+            mis_compensation: true,
         }
     }
 }
@@ -294,6 +305,9 @@ pub struct Iteration<'a> {
     /// The raster offset every splatted camera sample of this iteration shares
     /// ([`crate::splat_frame::film_offset`]).
     pub film_offset: [f32; 2],
+    /// MIS compensation for image environments ([`VcmSettings::mis_compensation`], off in
+    /// scenes with media).
+    pub mis_compensation: bool,
 }
 
 impl Iteration<'_> {
@@ -562,6 +576,7 @@ impl<S: SpectralMode> Engine<S> {
             techniques,
             across_groups: across,
             film_offset: crate::splat_frame::film_offset(seed, iteration),
+            mis_compensation: self.settings.mis_compensation && !scene.media.is_active(),
         };
         let width = frame.width as usize;
         let sets = WavelengthSource::<S>::new(scene, seed, iteration, techniques.merge, groups, width, pixel_count);

@@ -137,6 +137,30 @@ pub fn settings(algorithm: &str, seed: u64) -> RenderSettings {
     }
 }
 
+/// The built-in box with the environment (mask 456) lit by an image environment instead of the
+/// constant one: a 16 × 8 map with a bright patch, a gradient and dark rows.
+pub fn image_environment_box() -> Scene {
+    let base = scene::cornell::build(456, 32, 32).unwrap();
+    assert!(base.lights.len() == 1 && base.lights[0].is_environment());
+    let (w, h) = (16u32, 8u32);
+    let pixels = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            match (x, y) {
+                (5..=7, 2..=3) => spectrum::Rgb::new(30.0, 24.0, 12.0),
+                (_, 6..) => spectrum::Rgb::splat(0.05),
+                _ => spectrum::Rgb::new(0.3 + 0.1 * x as f32, 0.6, 1.0 - 0.05 * x as f32),
+            }
+        })
+        .collect();
+    let image = std::sync::Arc::new(scene::desc::TextureImage { width: w, height: h, pixels });
+    let rotation = [math::Vec3::X, math::Vec3::Z, -math::Vec3::Y];
+    let env = Light::from_desc(&scene::desc::LightDesc::EnvMap { image, scale: 1.0, to_world: rotation }).unwrap();
+    let scene = Scene::new("env-map box", base.primitives.clone(), base.materials.clone(), vec![env], base.camera);
+    assert!(matches!(&scene.lights[0], Light::EnvMap(map) if map.has_compensated_density()));
+    scene
+}
+
 /// What the primary rays of a block see.
 #[derive(Clone, Copy, Debug)]
 pub struct BlockView {

@@ -182,10 +182,10 @@ impl Bvh {
             if let Some(node) = self.nodes.get(child as usize) {
                 math::prefetch::prefetch_lines(node);
             }
-        } else if meta & TRIANGLES != 0 {
-            if let Some(block) = self.blocks.get(child as usize) {
-                math::prefetch::prefetch_lines(block);
-            }
+        } else if meta & TRIANGLES != 0
+            && let Some(block) = self.blocks.get(child as usize)
+        {
+            math::prefetch::prefetch_lines(block);
         }
     }
 

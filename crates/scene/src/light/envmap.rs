@@ -270,7 +270,11 @@ impl EnvMapLight {
     /// direction. Both are continuous, so the two queries agree to rounding (the direction's
     /// round trip through `atan2`/`acos`), and this skips that round trip. `None` when nothing is
     /// emitted from the sampled point (or at the poles, where the density is singular).
-    fn sample(&self, u: [f32; 2], density: Density) -> Option<(Vec3, Rgb, f32, f32)> {
+    ///
+    /// `density` is the density sampled; the sample also reports the density per steradian of
+    /// the full density and of `report` at the sampled point (the light pass samples the full
+    /// density and needs the compensated one's for its MIS).
+    fn sample(&self, u: [f32; 2], density: Density, report: Density) -> Option<EnvSample> {
         let d = &*self.data;
         let compensated = d.compensated_for(density);
         let (rows, columns) = d.tables(compensated);
@@ -303,9 +307,20 @@ impl EnvMapLight {
             None => density,
             Some(_) => bilinear_value(corners.map(|texel| texel.density), fx, fy),
         };
-        let pdf = density / (2.0 * PI * PI * sin_theta);
-        let full_pdf = full / (2.0 * PI * PI * sin_theta);
-        (pdf > 0.0 && !radiance.is_black()).then_some((direction, radiance, pdf, full_pdf))
+        let reported = match d.compensated_for(report) {
+            Some(c) if compensated.is_none() => bilinear_value(c.corners(&corners, j0), fx, fy),
+            Some(_) => density,
+            None => full,
+        };
+        let per_steradian = |density: f32| density / (2.0 * PI * PI * sin_theta);
+        let pdf = per_steradian(density);
+        (pdf > 0.0 && !radiance.is_black()).then(|| EnvSample {
+            direction,
+            radiance,
+            pdf,
+            full_pdf: per_steradian(full),
+            reported_pdf: per_steradian(reported),
+        })
     }
 
     /// Prefetch hints ([`math::prefetch()`]) for what [`EnvMapLight::sample`] will read for the
@@ -408,6 +423,20 @@ fn fraction(u: f32) -> f32 {
     }
 }
 
+/// A direction sampled from the map ([`EnvMapLight::sample`]).
+struct EnvSample {
+    /// Unit world direction towards the environment.
+    direction: Vec3,
+    /// Radiance arriving from it.
+    radiance: Rgb,
+    /// The sampled density's pdf of `direction`, per steradian.
+    pdf: f32,
+    /// The full density's pdf, per steradian.
+    full_pdf: f32,
+    /// The reported density's pdf, per steradian.
+    reported_pdf: f32,
+}
+
 impl EnvMapLight {
     /// Next-event estimation: a direction importance-sampled from the map.
     pub(super) fn sample_direct(&self, u: [f32; 2], sphere: &BoundingSphere) -> Option<DirectSample> {
@@ -422,27 +451,32 @@ impl EnvMapLight {
     }
 
     fn sample_direct_with(&self, u: [f32; 2], sphere: &BoundingSphere, density: Density) -> Option<DirectSample> {
-        let (direction, radiance, pdf, full) = self.sample(u, density)?;
+        let EnvSample { direction, radiance, pdf, full_pdf, .. } = self.sample(u, density, density)?;
         Some(DirectSample {
             radiance,
             direction,
             distance: f32::INFINITY,
             direct_pdf: PdfW(pdf),
-            emission_pdf: PdfW(full * disc_pdf(sphere)),
+            emission_pdf: PdfW(full_pdf * disc_pdf(sphere)),
             cos_at_light: 1.0,
         })
     }
 
-    /// A light sub-path start: an importance-sampled direction, an origin on the
-    /// bounding-sphere disc.
+    /// A light sub-path start: an importance-sampled direction (the full density), an origin on
+    /// the bounding-sphere disc. `direct_pdf` is `direct`'s density per steradian of the
+    /// direction towards the light, the density with which next-event estimation would have
+    /// sampled it.
     pub(super) fn sample_emission(
         &self,
         u_position: [f32; 2],
         u_direction: [f32; 2],
         sphere: &BoundingSphere,
+        direct: Density,
     ) -> EmissionSample {
         // The light travels away from the sampled environment direction.
-        let Some((towards_light, radiance, pdf, _)) = self.sample(u_direction, Density::Full) else {
+        let Some(EnvSample { direction: towards_light, radiance, pdf, reported_pdf, .. }) =
+            self.sample(u_direction, Density::Full, direct)
+        else {
             return EmissionSample {
                 normal: Vec3::ZERO,
                 energy: Rgb::BLACK,
@@ -460,7 +494,7 @@ impl EnvMapLight {
             origin: disc_origin(&Frame::from_z(direction), u_position, sphere),
             direction,
             emission_pdf: PdfW(pdf * disc_pdf(sphere)),
-            direct_pdf: PdfA(pdf),
+            direct_pdf: PdfA(reported_pdf),
             cos_at_light: 1.0,
         }
     }
@@ -572,7 +606,10 @@ mod tests {
                 })
                 .collect();
             directions.extend([Vec3::Y, -Vec3::Y, Vec3::X, -Vec3::X, Vec3::Z, -Vec3::Z]);
-            directions.extend((0..2000).filter_map(|_| light.sample(rng.uniform2(), Density::Full).map(|s| s.0)));
+            directions.extend(
+                (0..2000)
+                    .filter_map(|_| light.sample(rng.uniform2(), Density::Full, Density::Full).map(|s| s.direction)),
+            );
             for direction in directions {
                 let world = to_world[0] * direction.x + to_world[1] * direction.y + to_world[2] * direction.z;
                 for v in [direction, world] {
@@ -585,7 +622,8 @@ mod tests {
     #[test]
     fn a_sample_reports_what_evaluate_finds_for_its_direction() {
         // `sample` interpolates at the sampled point instead of re-deriving it from the
-        // direction, with either density: the two agree to rounding, relative 1e-4 plus the conditioning of
+        // direction, with either density sampled and either reported: the two agree to
+        // rounding, relative 1e-4 plus the conditioning of
         // `evaluate`'s lookup near a pole: acos(y) moves by ε / sin θ for a rounding ε of y, and
         // the density and radiance there vary like θ (and with the ill-defined azimuth), so
         // relatively by about ε / sin² θ.
@@ -594,12 +632,17 @@ mod tests {
         let mut rng = Rng::new(9, 4);
         for (w, h) in [(8, 5), (1, 2), (7, 16), (64, 32)] {
             let light = test_light(w, h, rotation);
-            for density in [Density::Full, Density::Compensated] {
-                for _ in 0..20_000 {
-                    let Some((direction, radiance, pdf, full)) = light.sample(rng.uniform2(), density) else {
+            let pairs =
+                [Density::Full, Density::Compensated].map(|a| [Density::Full, Density::Compensated].map(|b| (a, b)));
+            for (density, report) in pairs.into_iter().flatten() {
+                for _ in 0..10_000 {
+                    let Some(EnvSample { direction, radiance, pdf, full_pdf: full, reported_pdf }) =
+                        light.sample(rng.uniform2(), density, report)
+                    else {
                         continue;
                     };
                     let (r, p, full_p) = light.evaluate_with(direction, density);
+                    let (_, reported_p, _) = light.evaluate_with(direction, report);
                     let close =
                         |a: f32, b: f32, tolerance: f32| (a - b).abs() <= tolerance * a.abs().max(b.abs()) + 1e-6;
                     let local = light.to_local(direction);
@@ -608,18 +651,27 @@ mod tests {
                     assert!(close(full, full_p, tolerance), "{w}×{h} {density:?}: full pdf {full} vs {full_p}");
                     // The radiance is interpolated between corners that may differ a lot (the
                     // test map's seam cell goes from 64 to 1), so its rounding is relative to
-                    // the cell's largest corner, not to the value.
+                    // the cell's largest corner, not to the value. So is the reported density's
+                    // when it is not the sampled one: the sample lands anywhere in its cell,
+                    // also where the compensated density is near its zero.
                     let (s, t) = light.square_of(local);
                     let cell = (
                         ((s * w as f32) as usize).min(w as usize - 1),
                         ((t * (h - 1) as f32) as usize).min(h as usize - 2),
                     );
-                    let scale = light
-                        .data
-                        .corners(cell.0, cell.1)
-                        .iter()
-                        .map(|t| t.radiance.max_component())
-                        .fold(0.0, f32::max);
+                    let corners = light.data.corners(cell.0, cell.1);
+                    let scale = corners.iter().map(|t| t.radiance.max_component()).fold(0.0, f32::max);
+                    let lattice = match light.data.compensated_for(report) {
+                        Some(c) => c.corners(&corners, cell.1),
+                        None => corners.map(|t| t.density),
+                    };
+                    let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
+                    let pdf_scale = lattice.into_iter().fold(0.0, f32::max) / (2.0 * PI * PI * sin_theta);
+                    assert!(
+                        (reported_pdf - reported_p).abs()
+                            <= tolerance * reported_pdf.max(reported_p).max(pdf_scale) + 1e-6,
+                        "{w}×{h} {density:?} reporting {report:?}: pdf {reported_pdf} vs {reported_p}"
+                    );
                     for (a, b) in [(radiance.r, r.r), (radiance.g, r.g), (radiance.b, r.b)] {
                         assert!(
                             (a - b).abs() <= tolerance * scale + 1e-6,
@@ -657,7 +709,9 @@ mod tests {
         }
         assert!(dim > 1000, "{dim} directions in dim cells");
         for _ in 0..20_000 {
-            if let Some((direction, _, pdf, _)) = light.sample(rng.uniform2(), Density::Compensated) {
+            if let Some(EnvSample { direction, pdf, .. }) =
+                light.sample(rng.uniform2(), Density::Compensated, Density::Compensated)
+            {
                 let (s, t) = light.square_of(light.to_local(direction));
                 let (i, j) = ((s * 16.0) as usize % 16, ((t * 8.0) as usize).min(7));
                 assert!(pdf > 0.0 && !dim_cell(i, j), "sampled the dim cell ({i}, {j})");

@@ -363,7 +363,27 @@ impl Light {
             Light::Goniometric(light) => light.sample_emission(u_direction),
             Light::Directional(light) => light.sample_emission(u_position, sphere),
             Light::Background(light) => light.sample_emission(u_position, u_direction, sphere),
-            Light::EnvMap(light) => light.sample_emission(u_position, u_direction, sphere),
+            Light::EnvMap(light) => light.sample_emission(u_position, u_direction, sphere, envmap::Density::Full),
+        }
+    }
+
+    /// [`Light::sample_emission`] for an estimator whose next-event estimation samples
+    /// [`Light::sample_direct_compensated`] (MIS compensation in the VCM engine): the same
+    /// sample, whose `direct_pdf` is the compensated density's for an image environment (the
+    /// density with which next-event estimation would have found the direction towards the
+    /// light; 0 where the map is dimmer than its mean). Every other light samples as
+    /// [`Light::sample_emission`].
+    pub fn sample_emission_compensated(
+        &self,
+        u_position: [f32; 2],
+        u_direction: [f32; 2],
+        sphere: &BoundingSphere,
+    ) -> EmissionSample {
+        match self {
+            Light::EnvMap(light) => {
+                light.sample_emission(u_position, u_direction, sphere, envmap::Density::Compensated)
+            }
+            _ => self.sample_emission(u_position, u_direction, sphere),
         }
     }
 
