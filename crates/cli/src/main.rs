@@ -449,7 +449,7 @@ pub(crate) fn parse_light_sampler(text: &str) -> Result<LightSampler, String> {
 }
 
 /// Parses an `on|off` switch.
-fn parse_on_off(text: &str) -> Result<bool, String> {
+pub(crate) fn parse_on_off(text: &str) -> Result<bool, String> {
     match text {
         "on" => Ok(true),
         "off" => Ok(false),

@@ -105,6 +105,9 @@ pub struct ConformanceArgs {
     /// Light sampler of the path tracer, as `vcm render --light-sampler`.
     #[arg(long, default_value = "tree", value_name = "tree|power", value_parser = crate::parse_light_sampler)]
     pub light_sampler: render::path_tracer::LightSampler,
+    /// MIS compensation for image environments, as `vcm render --mis-compensation`.
+    #[arg(long, default_value = "on", value_name = "on|off", value_parser = crate::parse_on_off, action = clap::ArgAction::Set)]
+    pub mis_compensation: bool,
     /// Russian roulette of the path tracer, as `vcm render --rr-depth` (`file`: the scene
     /// file's integrator rr_depth, Mitsuba's default 5).
     #[arg(long, default_value = "albedo", value_name = "N|albedo|file", value_parser = crate::parse_russian_roulette)]
@@ -285,6 +288,7 @@ fn render_and_judge(
     request.keep_variance = true;
     request.film = args.film;
     request.light_sampler = args.light_sampler;
+    request.mis_compensation = args.mis_compensation;
     request.russian_roulette = args.rr_depth.0;
     // The verdict takes the render's error from the spread of its iterations, which needs them
     // independent (the stratified sequence's are not, render::primary_samples).
