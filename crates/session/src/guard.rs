@@ -102,8 +102,10 @@ mod tests {
         assert_eq!(check(&scene, &settings, 0, Some(resident + two + one / 4), 2).unwrap(), Guard::Fits);
         // Too little for one lane: what the guard decides without lanes (here an error).
         let tight = Some(resident + one / 2);
-        let decide = |lanes| check(&scene, &settings, 0, tight, lanes).map_err(|e| e.to_string());
-        assert!(decide(1).is_err());
+        // (Not the errors' texts: they hold the resident memory of the moment, which other tests
+        // of this process move between the two calls.)
+        let decide = |lanes| check(&scene, &settings, 0, tight, lanes).map_err(|_| ());
+        assert_eq!(decide(1), Err(()));
         assert_eq!(decide(2), decide(1));
     }
 }
