@@ -77,7 +77,7 @@ pub fn estimate(scene: &Scene, settings: &VcmSettings, seed: u64) -> MemoryEstim
         techniques,
         across_groups: false,
         film_offset: crate::splat_frame::film_offset(seed, 0),
-        mis_compensation: settings.mis_compensation && !scene.media.is_active(),
+        mis_compensation: settings.compensates(scene),
     };
     let pilot = light_paths.clamp(1, PILOT_PATHS);
     let mut vertices = Vec::new();

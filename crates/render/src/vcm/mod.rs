@@ -281,6 +281,12 @@ impl VcmSettings {
             mis_compensation: true,
         }
     }
+
+    /// Whether an iteration on `scene` compensates ([`VcmSettings::mis_compensation`]): asked
+    /// for, and no media (whose vertices sample the full density).
+    pub fn compensates(&self, scene: &Scene) -> bool {
+        self.mis_compensation && !scene.media.is_active()
+    }
 }
 
 /// Per-iteration values shared by the passes.
@@ -576,7 +582,7 @@ impl<S: SpectralMode> Engine<S> {
             techniques,
             across_groups: across,
             film_offset: crate::splat_frame::film_offset(seed, iteration),
-            mis_compensation: self.settings.mis_compensation && !scene.media.is_active(),
+            mis_compensation: self.settings.compensates(scene),
         };
         let width = frame.width as usize;
         let sets = WavelengthSource::<S>::new(scene, seed, iteration, techniques.merge, groups, width, pixel_count);
